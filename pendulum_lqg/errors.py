@@ -1,0 +1,24 @@
+"""Exceptions raised by pendulum_lqg.
+
+All of them subclass :class:`ValueError` (as python-control's ``ControlArgument`` family does), so a
+caller that already catches ``ValueError`` for bad input keeps working. Messages are one line and
+start with the name of the offending parameter.
+"""
+
+from __future__ import annotations
+
+
+class PendulumLQGError(ValueError):
+    """Base class: bad input to pendulum_lqg (the message names the parameter)."""
+
+
+class ShapeError(PendulumLQGError):
+    """A matrix or vector argument has the wrong shape."""
+
+
+class DesignError(PendulumLQGError):
+    """A design is impossible for the given data (e.g. not stabilisable, indefinite weight)."""
+
+
+class ConfigError(PendulumLQGError):
+    """A configuration value (CLI option, TOML key, env keyword, model override) is invalid."""

@@ -1,0 +1,201 @@
+"""Linearisation of the MuJoCo cart-pole about the upright equilibrium.
+
+* :func:`linearize` — continuous ``(A, B, C, D)`` (and the generalised-force input ``F``) by central
+  finite differences of MuJoCo's own forward dynamics and sensors;
+* :func:`discretize_transition` — discrete ``(Φ, Γ)`` at a control period ``T = k·h`` by composing
+  ``mjd_transitionFD`` over the ``k`` physics steps (what the simulator really does, integrator
+  included);
+* :func:`discretize_zoh` — the same from ``(A, B)`` by exact zero-order hold;
+* :func:`analytic_linearization` — a rigid-body reference built from the model's own masses, centre of
+  mass and inertia, used by the tests to cross-check the finite differences.
+
+State ``x = [p, θ, ṗ, θ̇]``, input the cart force [N], output ``y = [p, θ]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from pendulum_lqg.design import zoh
+from pendulum_lqg.design.structure import StructureReport, structure
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.plant import Plant
+
+#: Finite-difference step for states and inputs (central differences: error O(eps²)).
+FD_EPS = 1e-6
+
+
+@dataclass(frozen=True)
+class ContinuousModel:
+    """``ẋ = Ax + Bu + F f``, ``y = Cx + Du`` about the upright equilibrium.
+
+    Attributes
+    ----------
+    A : (4, 4), B : (4, 1) per newton of cart force, C : (2, 4), D : (2, 1)
+    F : (4, 2) input matrix of generalised forces ``[f_slider (N), τ_hinge (N m)]``
+        (``qfrc_applied``), used when process noise enters as forces
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    F: np.ndarray
+
+    def structure(self) -> StructureReport:
+        return structure(self.A, self.B, self.C)
+
+
+@dataclass(frozen=True)
+class DiscreteModel:
+    """``x[n+1] = Φ x[n] + Γ u[n]``, ``y[n] = C x[n]`` at period ``dt``."""
+
+    Phi: np.ndarray
+    Gamma: np.ndarray
+    C: np.ndarray
+    dt: float
+    method: str
+
+    def structure(self) -> StructureReport:
+        return structure(self.Phi, self.Gamma, self.C, discrete=True)
+
+
+def steps_per_period(plant: Plant, dt: float) -> int:
+    """Number of physics steps in one control period; ``dt`` must be a positive multiple of h."""
+    try:
+        dt = float(dt)
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"control_period: expected a number of seconds, got {dt!r}") from exc
+    h = plant.timestep
+    if not np.isfinite(dt) or dt <= 0:
+        raise ConfigError(f"control_period: expected a positive number of seconds, got {dt!r}")
+    k = round(dt / h)
+    if k < 1 or abs(k * h - dt) > 1e-9 * max(dt, h):
+        raise ConfigError(f"control_period: {dt!r} s is not a positive integer multiple of the "
+                          f"physics step {h!r} s")
+    return int(k)
+
+
+def _equilibrium(plant: Plant) -> mujoco.MjData:
+    data = mujoco.MjData(plant.model)
+    mujoco.mj_resetData(plant.model, data)
+    data.qpos[:] = 0.0
+    data.qvel[:] = 0.0
+    data.ctrl[:] = 0.0
+    return data
+
+
+def _dynamics(plant: Plant, data: mujoco.MjData, x: np.ndarray, u: float, f: np.ndarray,
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """``(ẋ, y)`` at state x, force u and generalised forces f, from MuJoCo's forward dynamics."""
+    m = plant.model
+    data.qpos[plant.qpos_index] = x[:2]
+    data.qvel[plant.qvel_index] = x[2:]
+    data.ctrl[0] = u
+    data.qfrc_applied[:] = 0.0
+    data.qfrc_applied[plant.qvel_index] = f
+    mujoco.mj_forward(m, data)
+    xdot = np.concatenate([data.qvel[plant.qvel_index], data.qacc[plant.qvel_index]])
+    return xdot, data.sensordata[plant.sensor_index].copy()
+
+
+def linearize(plant: Plant, *, eps: float = FD_EPS) -> ContinuousModel:
+    """Continuous linearisation about ``x = 0, u = 0`` by central differences of ``mj_forward``.
+
+    The actuator must be unsaturated at the equilibrium (ctrl = 0 lies inside ``ctrlrange``), so
+    ``B`` is the force-to-acceleration map of the motor. ``ẋ`` for the positions is ``qvel``
+    (hinge and slide joints), for the velocities ``qacc``.
+    """
+    data = _equilibrium(plant)
+    n, m = 4, 1
+    x0, f0 = np.zeros(n), np.zeros(2)
+    A, B = np.zeros((n, n)), np.zeros((n, m))
+    C, D = np.zeros((2, n)), np.zeros((2, m))
+    F = np.zeros((n, 2))
+    for i in range(n):
+        dx = np.zeros(n)
+        dx[i] = eps
+        fp, yp = _dynamics(plant, data, x0 + dx, 0.0, f0)
+        fm, ym = _dynamics(plant, data, x0 - dx, 0.0, f0)
+        A[:, i] = (fp - fm) / (2 * eps)
+        C[:, i] = (yp - ym) / (2 * eps)
+    fp, yp = _dynamics(plant, data, x0, eps, f0)
+    fm, ym = _dynamics(plant, data, x0, -eps, f0)
+    B[:, 0] = (fp - fm) / (2 * eps)
+    D[:, 0] = (yp - ym) / (2 * eps)
+    for j in range(2):
+        df = np.zeros(2)
+        df[j] = eps
+        fp, _ = _dynamics(plant, data, x0, 0.0, df)
+        fm, _ = _dynamics(plant, data, x0, 0.0, -df)
+        F[:, j] = (fp - fm) / (2 * eps)
+    return ContinuousModel(A=A, B=B, C=C, D=D, F=F)
+
+
+def discretize_zoh(model: ContinuousModel, dt: float) -> DiscreteModel:
+    """Exact zero-order-hold discretisation of ``(A, B)`` at period ``dt``."""
+    Phi, Gamma = zoh(model.A, model.B, dt)
+    return DiscreteModel(Phi=Phi, Gamma=Gamma, C=model.C, dt=float(dt), method="zoh")
+
+
+def discretize_transition(plant: Plant, dt: float, *, eps: float = FD_EPS) -> DiscreteModel:
+    """``(Φ, Γ)`` by composing MuJoCo's one-step ``mjd_transitionFD`` over one control period.
+
+    With ``k`` physics steps per period and one-step Jacobians ``(A_h, B_h)``:
+    ``Φ = A_hᵏ`` and ``Γ = Σ_{j<k} A_hʲ B_h`` (the input is held over the period). This includes
+    the integrator's own discretisation, so it differs from the exact ZOH by O(h).
+    """
+    k = steps_per_period(plant, dt)
+    m = plant.model
+    data = _equilibrium(plant)
+    mujoco.mj_forward(m, data)
+    nx = 2 * m.nv + m.na
+    Ah, Bh = np.zeros((nx, nx)), np.zeros((nx, m.nu))
+    mujoco.mjd_transitionFD(m, data, eps, True, Ah, Bh, None, None)
+    idx = np.concatenate([plant.qvel_index, m.nv + plant.qvel_index])  # tangent-space order
+    Ah, Bh = Ah[np.ix_(idx, idx)], Bh[idx, :]
+    Phi, Gamma = np.eye(4), np.zeros((4, m.nu))
+    for _ in range(k):
+        Gamma = Ah @ Gamma + Bh
+        Phi = Ah @ Phi
+    C = linearize(plant, eps=eps).C  # the sensors do not depend on the period
+    return DiscreteModel(Phi=Phi, Gamma=Gamma, C=C, dt=k * plant.timestep,
+                         method="mjd_transitionFD")
+
+
+def analytic_linearization(plant: Plant) -> ContinuousModel:
+    r"""Rigid-body cart-pole linearised at the upright, from the model's own parameters.
+
+    Generalised coordinates ``q = [p, θ]``; mass matrix at θ = 0
+
+    .. math:: M_0 = \begin{bmatrix} m_c + m_p + a_p & m_p l \\ m_p l & I_p + m_p l^2 + a_θ
+              \end{bmatrix},
+
+    gravity stiffness ``∂τ/∂θ = m_p g l`` (the pole's potential is ``m_p g l \cos θ``), joint damping
+    ``d``, input on the slider. ``l`` is the hinge-to-centre-of-mass distance, ``I_p`` the pole
+    inertia about its centre of mass around the hinge axis, ``a`` the joint armatures — all read from
+    the compiled model.
+    """
+    m = plant.model
+    mc, mp, l_com, Ip, g = (plant.cart_mass, plant.pole_mass, plant.pole_com,
+                            plant.pole_inertia_com, plant.gravity)
+    dof = plant.qvel_index
+    arm = m.dof_armature[dof]
+    damp = m.dof_damping[dof]
+    M0 = np.array([[mc + mp + arm[0], mp * l_com], [mp * l_com, Ip + mp * l_com**2 + arm[1]]])
+    Minv = np.linalg.inv(M0)
+    stiffness = np.array([[0.0, 0.0], [0.0, mp * g * l_com]])
+    gear = float(m.actuator_gear[0, 0])
+    A = np.zeros((4, 4))
+    A[:2, 2:] = np.eye(2)
+    A[2:, :2] = Minv @ stiffness
+    A[2:, 2:] = -Minv @ np.diag(damp)
+    B = np.zeros((4, 1))
+    B[2:, 0] = Minv @ np.array([gear, 0.0])
+    F = np.zeros((4, 2))
+    F[2:, :] = Minv
+    C = np.hstack([np.eye(2), np.zeros((2, 2))])
+    return ContinuousModel(A=A, B=B, C=C, D=np.zeros((2, 1)), F=F)

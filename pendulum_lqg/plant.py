@@ -1,0 +1,289 @@
+"""The MuJoCo cart-pole: loading (with overrides), named read-outs, and the state vector.
+
+The MJCF file ``models/cartpole.xml`` is the one source of truth for physical parameters. This module
+reads masses, lengths, limits and the timestep from the compiled model and never repeats them.
+
+State convention (used everywhere in the project): ``x = [p, θ, ṗ, θ̇]`` — cart position (m), pole
+angle from upright (rad, positive tips the pole towards +x), and their rates. Input ``u`` is the
+horizontal force on the cart in newtons; measurement ``y = [p, θ]``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from pendulum_lqg.errors import ConfigError
+
+STATE_NAMES: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")
+STATE_LABELS: tuple[str, ...] = ("cart position p [m]", "pole angle θ [rad]",
+                                 "cart velocity ṗ [m/s]", "pole rate θ̇ [rad/s]")
+OUTPUT_NAMES: tuple[str, ...] = ("p", "theta")
+
+#: Names of MJCF elements the code relies on (the XML defines them; these are look-up keys).
+SLIDER, HINGE, ACTUATOR = "slider", "hinge", "force"
+CART_BODY, POLE_BODY, CART_GEOM, POLE_GEOM, POLE_TIP = "cart", "pole", "cart", "pole", "pole_tip"
+SENSORS = ("cart_position", "pole_angle")
+
+
+def default_model_path() -> Path:
+    """Path of the bundled ``cartpole.xml`` (repository ``models/`` or the installed copy)."""
+    here = Path(__file__).resolve().parent
+    for candidate in (here.parent / "models" / "cartpole.xml", here / "models" / "cartpole.xml"):
+        if candidate.is_file():
+            return candidate
+    raise ConfigError("model: cannot find models/cartpole.xml next to the pendulum_lqg package")
+
+
+@dataclass(frozen=True)
+class ModelOverrides:
+    """Changes to the MJCF model for mismatch studies, applied by editing the spec.
+
+    Every field is optional; ``None`` keeps the XML value. Scales multiply the XML value.
+
+    Attributes
+    ----------
+    pole_mass, cart_mass : float, kg
+        Mass of the pole rod / the cart body.
+    pole_length : float, m
+        Full length of the pole rod (hinge to tip); the rod stays uniform.
+    pole_mass_scale, pole_length_scale, cart_mass_scale : float
+        Multipliers of the XML values (cannot be combined with the absolute value of the same field).
+    force_limit : float, N
+        Symmetric actuator limit ``ctrlrange = [-force_limit, force_limit]``.
+    timestep : float, s
+        Physics step.
+    """
+
+    pole_mass: float | None = None
+    pole_length: float | None = None
+    cart_mass: float | None = None
+    pole_mass_scale: float | None = None
+    pole_length_scale: float | None = None
+    cart_mass_scale: float | None = None
+    force_limit: float | None = None
+    timestep: float | None = None
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ConfigError(f"{f.name}: expected a number, got {value!r}")
+            if not np.isfinite(value) or value <= 0:
+                raise ConfigError(f"{f.name}: expected a finite positive number, got {value!r}")
+        for name in ("pole_mass", "pole_length", "cart_mass"):
+            if getattr(self, name) is not None and getattr(self, name + "_scale") is not None:
+                raise ConfigError(f"{name}: give either {name} or {name}_scale, not both")
+
+    @classmethod
+    def from_mapping(cls, data: dict[str, object] | None) -> ModelOverrides:
+        """Build from a mapping (e.g. a TOML table); unknown keys are an error listing the known."""
+        data = dict(data or {})
+        known = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(set(data) - set(known))
+        if unknown:
+            raise ConfigError(f"model override {unknown[0]!r}: unknown key; known keys: "
+                              + ", ".join(known))
+        return cls(**data)  # type: ignore[arg-type]
+
+    def is_empty(self) -> bool:
+        return all(getattr(self, f.name) is None for f in dataclasses.fields(self))
+
+
+def _apply_overrides(spec: mujoco.MjSpec, ov: ModelOverrides) -> None:
+    pole = spec.geom(POLE_GEOM)
+    cart = spec.geom(CART_GEOM)
+    if pole is None or cart is None:
+        raise ConfigError(f"model: overrides need geoms named {POLE_GEOM!r} and {CART_GEOM!r}")
+    if ov.pole_mass is not None or ov.pole_mass_scale is not None:
+        pole.mass = ov.pole_mass if ov.pole_mass is not None else pole.mass * ov.pole_mass_scale
+    if ov.cart_mass is not None or ov.cart_mass_scale is not None:
+        cart.mass = ov.cart_mass if ov.cart_mass is not None else cart.mass * ov.cart_mass_scale
+    if ov.pole_length is not None or ov.pole_length_scale is not None:
+        start, end = np.array(pole.fromto[:3]), np.array(pole.fromto[3:])
+        old = float(np.linalg.norm(end - start))
+        new = ov.pole_length if ov.pole_length is not None else old * ov.pole_length_scale
+        end = start + (end - start) * (new / old)
+        pole.fromto = np.concatenate([start, end])
+        tip = spec.site(POLE_TIP)
+        if tip is not None:
+            tip.pos = end
+    if ov.force_limit is not None:
+        act = spec.actuator(ACTUATOR)
+        act.ctrlrange = np.array([-ov.force_limit, ov.force_limit])
+    if ov.timestep is not None:
+        spec.option.timestep = ov.timestep
+
+
+def load_plant(path: str | Path | None = None, *, overrides: ModelOverrides | None = None) -> Plant:
+    """Load and compile the cart-pole model, optionally with parameter overrides.
+
+    Parameters
+    ----------
+    path : path to an MJCF file, default the bundled ``models/cartpole.xml``.
+    overrides : changes applied to the spec before compiling (mismatch studies).
+    """
+    path = Path(path) if path is not None else default_model_path()
+    if not path.is_file():
+        raise ConfigError(f"model: file not found: {path}")
+    try:
+        spec = mujoco.MjSpec.from_file(str(path))
+    except Exception as exc:  # MuJoCo raises ValueError with the parser message
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ConfigError(f"model: cannot parse {path}: {first}") from exc
+    overrides = overrides or ModelOverrides()
+    _apply_overrides(spec, overrides)
+    try:
+        model = spec.compile()
+    except Exception as exc:
+        raise ConfigError(f"model: cannot compile {path}: {str(exc).strip()}") from exc
+    return Plant(model=model, path=path, overrides=overrides)
+
+
+@dataclass(frozen=True, eq=False)
+class Plant:
+    """A compiled cart-pole model with named read-outs.
+
+    Use :func:`load_plant` to make one. The attributes below are read from the model, never set.
+    """
+
+    model: mujoco.MjModel
+    path: Path
+    overrides: ModelOverrides
+
+    def __post_init__(self) -> None:
+        m = self.model
+        for kind, name in ((mujoco.mjtObj.mjOBJ_JOINT, SLIDER), (mujoco.mjtObj.mjOBJ_JOINT, HINGE),
+                           (mujoco.mjtObj.mjOBJ_ACTUATOR, ACTUATOR),
+                           (mujoco.mjtObj.mjOBJ_BODY, CART_BODY),
+                           (mujoco.mjtObj.mjOBJ_BODY, POLE_BODY)):
+            if mujoco.mj_name2id(m, kind, name) < 0:
+                raise ConfigError(f"model: {self.path} has no {kind.name[6:].lower()} named {name!r}")
+        if m.nu != 1:
+            raise ConfigError(f"model: expected exactly one actuator, found {m.nu}")
+        if m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4:
+            raise ConfigError("model: the RK4 integrator is not supported (mjd_transitionFD "
+                              "refuses it); use Euler or implicitfast")
+
+    # ---- addresses -------------------------------------------------------------------------
+    @cached_property
+    def qpos_index(self) -> np.ndarray:
+        """qpos addresses of ``[slider, hinge]``."""
+        return np.array([self.model.joint(SLIDER).qposadr[0], self.model.joint(HINGE).qposadr[0]])
+
+    @cached_property
+    def qvel_index(self) -> np.ndarray:
+        """qvel (dof) addresses of ``[slider, hinge]``."""
+        return np.array([self.model.joint(SLIDER).dofadr[0], self.model.joint(HINGE).dofadr[0]])
+
+    @cached_property
+    def sensor_index(self) -> np.ndarray:
+        """sensordata addresses of ``[cart_position, pole_angle]``."""
+        return np.array([self.model.sensor(s).adr[0] for s in SENSORS])
+
+    # ---- physical parameters, all read from the model --------------------------------------
+    @property
+    def timestep(self) -> float:
+        """Physics step h [s]."""
+        return float(self.model.opt.timestep)
+
+    @property
+    def force_limit(self) -> tuple[float, float]:
+        """Actuator ``ctrlrange`` in newtons (force = gear · ctrl, gear read below)."""
+        lo, hi = self.model.actuator(ACTUATOR).ctrlrange
+        gear = float(self.model.actuator(ACTUATOR).gear[0])
+        return float(lo * gear), float(hi * gear)
+
+    @property
+    def u_max(self) -> float:
+        """Largest force magnitude the motor can apply [N] (symmetric limits assumed)."""
+        lo, hi = self.force_limit
+        return float(min(-lo, hi))
+
+    @property
+    def track_limit(self) -> float:
+        """Half-length of the track: the slider stops at ±track_limit [m]."""
+        lo, hi = self.model.joint(SLIDER).range
+        return float(min(-lo, hi))
+
+    @property
+    def gravity(self) -> float:
+        return float(-self.model.opt.gravity[2])
+
+    @property
+    def cart_mass(self) -> float:
+        return float(self.model.body(CART_BODY).mass[0])
+
+    @property
+    def pole_mass(self) -> float:
+        return float(self.model.body(POLE_BODY).mass[0])
+
+    @property
+    def pole_com(self) -> float:
+        """Distance from the hinge to the pole's centre of mass [m]."""
+        return float(np.linalg.norm(self.model.body(POLE_BODY).ipos))
+
+    @property
+    def pole_length(self) -> float:
+        """Full length of the pole rod (hinge to tip) [m], from the pole geom."""
+        g = self.model.geom(POLE_GEOM)
+        return float(2.0 * g.size[1])
+
+    @property
+    def pole_inertia_com(self) -> float:
+        """Pole moment of inertia about its centre of mass, around the hinge axis [kg m²]."""
+        body = self.model.body(POLE_BODY)
+        # Principal inertia rotated into the body frame, then projected on the hinge axis.
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, body.iquat)
+        rot = rot.reshape(3, 3)
+        inertia = rot @ np.diag(body.inertia) @ rot.T
+        axis = self.model.joint(HINGE).axis
+        return float(axis @ inertia @ axis)
+
+    def parameters(self) -> dict[str, float]:
+        """Physical parameters as read from the compiled model (for reports and recordings)."""
+        return {
+            "cart_mass": self.cart_mass, "pole_mass": self.pole_mass,
+            "pole_length": self.pole_length, "pole_com": self.pole_com,
+            "pole_inertia_com": self.pole_inertia_com, "gravity": self.gravity,
+            "force_limit": self.u_max, "track_limit": self.track_limit,
+            "timestep": self.timestep,
+        }
+
+    # ---- state conversion ------------------------------------------------------------------
+    def get_state(self, data: mujoco.MjData) -> np.ndarray:
+        """``x = [p, θ, ṗ, θ̇]`` from an MjData."""
+        return np.concatenate([data.qpos[self.qpos_index], data.qvel[self.qvel_index]])
+
+    def set_state(self, data: mujoco.MjData, x: np.ndarray) -> None:
+        """Write ``x = [p, θ, ṗ, θ̇]`` into an MjData (and recompute derived quantities)."""
+        data.qpos[self.qpos_index] = x[:2]
+        data.qvel[self.qvel_index] = x[2:]
+        mujoco.mj_forward(self.model, data)
+
+    @cached_property
+    def physics_state_layout(self) -> tuple[int, np.ndarray, np.ndarray]:
+        """``(nstate, qpos_cols, qvel_cols)`` of the ``mjSTATE_FULLPHYSICS`` vector.
+
+        The full-physics state is ``[time, qpos, qvel, act, history, plugin]`` in that order, so
+        the qpos block starts after the time entry and the qvel block after the qpos block.
+        """
+        m = self.model
+        st = mujoco.mjtState
+        size = mujoco.mj_stateSize(m, st.mjSTATE_FULLPHYSICS)
+        qpos0 = mujoco.mj_stateSize(m, st.mjSTATE_TIME)
+        qvel0 = qpos0 + mujoco.mj_stateSize(m, st.mjSTATE_QPOS)
+        return size, qpos0 + self.qpos_index, qvel0 + self.qvel_index
+
+    def state_columns(self) -> np.ndarray:
+        """Columns of the full-physics state vector holding ``[p, θ, ṗ, θ̇]``."""
+        _, qpos_cols, qvel_cols = self.physics_state_layout
+        return np.concatenate([qpos_cols, qvel_cols])
