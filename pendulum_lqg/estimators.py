@@ -1,0 +1,191 @@
+"""Runtime state estimators, vectorised over a batch of episodes.
+
+Every estimator keeps the textbook intermediates of its last step as attributes (filterpy style) so
+recordings and benchmarks can read them:
+
+* ``x_prior`` — x̄[n], the estimate of x[n] before the measurement y[n] (kept until the next sample);
+* ``x_hat`` — the estimate the controller uses at this sample;
+* ``innovation`` — ``y − C x̄``;
+* for Kalman filters ``P`` (a-posteriori covariance), ``M`` (a-priori) and ``gain``.
+
+The interface is two calls per control period: ``estimate(y) -> x̂`` and then ``update(u)`` with the
+input actually applied. Products with small matrices use ``einsum`` (no BLAS) so a row's result does
+not depend on the batch size: batched and single-episode runs agree bit for bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pendulum_lqg.errors import ShapeError
+
+
+def mv(M: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """Row-wise ``M @ x`` for a batch ``X`` (n, j) → (n, i); bitwise independent of n."""
+    return np.einsum("ij,nj->ni", M, X)
+
+
+class Estimator:
+    """Base: a batch of ``n`` estimates of ``x = [p, θ, ṗ, θ̇]``."""
+
+    #: True if the estimator wants the true state instead of the measurement.
+    needs_state: bool = False
+    #: "current" (uses y[n] for x̂[n]) or "predictor" (x̂[n] uses y up to n−1).
+    form: str = "current"
+
+    def __init__(self, n_state: int = 4) -> None:
+        self.n_state = n_state
+        self._prior = np.zeros((0, n_state))      # running a-priori estimate for the next sample
+        self.x_prior = np.zeros((0, n_state))
+        self.x_hat = np.zeros((0, n_state))
+        self.innovation = np.zeros((0, 2))
+
+    def reset(self, x_hat0: np.ndarray, rows: np.ndarray | None = None) -> None:
+        """Set the initial estimate (n, 4) — for all rows, or the given rows only."""
+        x_hat0 = np.asarray(x_hat0, dtype=float)
+        if x_hat0.ndim != 2 or x_hat0.shape[1] != self.n_state:
+            raise ShapeError(f"x_hat0: expected shape (n, {self.n_state}), found {x_hat0.shape}")
+        if rows is None:
+            self._prior = x_hat0.copy()
+            self.x_prior = x_hat0.copy()
+            self.x_hat = x_hat0.copy()
+            self.innovation = np.zeros((x_hat0.shape[0], 2))
+        else:
+            self._prior[rows] = x_hat0
+            self.x_prior[rows] = x_hat0
+            self.x_hat[rows] = x_hat0
+            self.innovation[rows] = 0.0
+
+    def estimate(self, y: np.ndarray) -> np.ndarray:
+        raise NotImplementedError  # abstract
+
+    def update(self, u: np.ndarray) -> None:
+        raise NotImplementedError  # abstract
+
+    def select(self, rows: np.ndarray) -> None:
+        """Keep only the given rows (episodes that ended are dropped from the batch)."""
+        self._prior = self._prior[rows]
+        self.x_prior = self.x_prior[rows]
+        self.x_hat = self.x_hat[rows]
+        self.innovation = self.innovation[rows]
+
+
+class TrueState(Estimator):
+    """No observer: the controller sees the true state (the full-information reference)."""
+
+    needs_state = True
+
+    def estimate(self, y: np.ndarray) -> np.ndarray:
+        self.x_prior = self.x_hat = np.array(y, dtype=float)
+        self.innovation = np.zeros((self.x_hat.shape[0], 2))
+        return self.x_hat
+
+    def update(self, u: np.ndarray) -> None:
+        return None
+
+
+class CurrentEstimator(Estimator):
+    r"""Current-estimate (filter) form with a constant gain — steady-state Kalman or Luenberger.
+
+    .. math:: \hat x_n = \bar x_n + L(y_n - C\bar x_n), \qquad
+              \bar x_{n+1} = \Phi\hat x_n + \Gamma u_n
+    """
+
+    form = "current"
+
+    def __init__(self, Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, L: np.ndarray, *,
+                 P: np.ndarray | None = None, M: np.ndarray | None = None) -> None:
+        super().__init__(Phi.shape[0])
+        self.Phi, self.Gamma, self.C, self.gain = Phi, Gamma, C, L
+        self.P, self.M = P, M                     # steady covariances (Kalman only)
+
+    def estimate(self, y: np.ndarray) -> np.ndarray:
+        self.x_prior = self._prior
+        self.innovation = y - mv(self.C, self.x_prior)                     # y − C x̄
+        self.x_hat = self.x_prior + mv(self.gain, self.innovation)         # x̂ = x̄ + L(y − Cx̄)
+        return self.x_hat
+
+    def update(self, u: np.ndarray) -> None:
+        self._prior = mv(self.Phi, self.x_hat) + mv(self.Gamma, u)         # x̄⁺ = Φx̂ + Γu
+
+
+class PredictorEstimator(Estimator):
+    r"""Predictor form, a general affine recursion driven by the held input and the measurement.
+
+    .. math:: \hat x_{n+1} = F\hat x_n + G_u u_n + G_y y_n
+
+    For a discrete predictor observer ``F = Φ − L_p C``, ``G_u = Γ``, ``G_y = L_p``; for an emulated
+    continuous observer (Kalman–Bucy) the ZOH of ``ẋ̂ = (A − LC)x̂ + Bu + Ly``. The control at sample
+    n uses ``x̂_n``, which has seen measurements up to n − 1 only.
+    """
+
+    form = "predictor"
+
+    def __init__(self, F: np.ndarray, G_u: np.ndarray, G_y: np.ndarray, C: np.ndarray, *,
+                 gain: np.ndarray | None = None, P: np.ndarray | None = None,
+                 M: np.ndarray | None = None) -> None:
+        super().__init__(F.shape[0])
+        self.F, self.G_u, self.G_y, self.C = F, G_u, G_y, C
+        self.gain = G_y if gain is None else gain
+        self.P, self.M = P, M
+        self._y = np.zeros((0, C.shape[0]))
+
+    def estimate(self, y: np.ndarray) -> np.ndarray:
+        self._y = y
+        self.x_prior = self.x_hat = self._prior
+        self.innovation = y - mv(self.C, self.x_prior)
+        return self.x_hat
+
+    def update(self, u: np.ndarray) -> None:
+        self._prior = mv(self.F, self.x_hat) + mv(self.G_u, u) + mv(self.G_y, self._y)
+
+    def select(self, rows: np.ndarray) -> None:
+        super().select(rows)
+        self._y = self._y[rows]
+
+
+class TimeVaryingKalman(Estimator):
+    r"""Time-varying discrete Kalman filter (current form) from an initial covariance ``M0``.
+
+    .. math::
+        P_n = M_n - M_nC^T(CM_nC^T + V)^{-1}CM_n,\quad L_n = P_nC^TV^{-1},\quad
+        \hat x_n = \bar x_n + L_n(y_n - C\bar x_n),\quad M_{n+1} = \Phi P_n\Phi^T + Q_d
+
+    The covariance recursion does not depend on the data, so it is computed once per step for the
+    whole batch (all episodes start from the same ``M0`` at the same time).
+    """
+
+    form = "current"
+
+    def __init__(self, Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, Qd: np.ndarray,
+                 V: np.ndarray, M0: np.ndarray) -> None:
+        super().__init__(Phi.shape[0])
+        self.Phi, self.Gamma, self.C, self.Qd, self.V, self.M0 = Phi, Gamma, C, Qd, V, M0
+        self._new_episode()
+
+    def _new_episode(self) -> None:
+        self.M = self.M0.copy()
+        self.P = self.M0.copy()
+        self.gain = np.zeros((self.n_state, self.C.shape[0]))
+
+    def reset(self, x_hat0: np.ndarray, rows: np.ndarray | None = None) -> None:
+        if rows is not None and rows.size != self.x_hat.shape[0]:
+            raise ShapeError("rows: the time-varying Kalman filter shares its covariance across "
+                             "the batch and can only reset all episodes together")
+        super().reset(x_hat0)
+        self._new_episode()
+
+    def estimate(self, y: np.ndarray) -> np.ndarray:
+        C, M, n = self.C, self.M, self.n_state
+        S = C @ M @ C.T + self.V                                      # innovation covariance
+        self.gain = np.linalg.solve(S, C @ M).T                       # L = M Cᵀ S⁻¹ = P Cᵀ V⁻¹
+        I_LC = np.eye(n) - self.gain @ C
+        self.P = I_LC @ M @ I_LC.T + self.gain @ self.V @ self.gain.T  # Joseph form
+        self.x_prior = self._prior
+        self.innovation = y - mv(C, self.x_prior)
+        self.x_hat = self.x_prior + mv(self.gain, self.innovation)
+        return self.x_hat
+
+    def update(self, u: np.ndarray) -> None:
+        self._prior = mv(self.Phi, self.x_hat) + mv(self.Gamma, u)
+        self.M = self.Phi @ self.P @ self.Phi.T + self.Qd             # M⁺ = Φ P Φᵀ + Q_d

@@ -1,0 +1,206 @@
+"""Per-episode metrics streamed from the closed loop, and their aggregates.
+
+Definitions (all integrals use the physics step h and the state at the start of each step, up to and
+including the step in which the episode failed):
+
+* ``cost`` — ``J = ∫ xᵀQx + uᵀRu dt`` (no ½; the optimal-cost check compares with ``x₀ᵀPx₀``);
+* ``rms_*`` — ``sqrt(∫ s² dt / t_alive)``; ``max_abs_*`` — the largest magnitude seen;
+* ``saturated_fraction`` — share of the alive time with ``|u|`` at the actuator limit;
+* ``rms_est_err_*`` — RMS over control samples of ``x̂[n] − x[n]`` (the estimate the controller used);
+* ``settling_time`` — the last time ``|θ|`` was above the scenario's ``settle_band`` (0 if never);
+* ``time_to_failure`` — time of the first failing physics step (``nan`` for a success).
+
+Aggregates: success rate with its 95 % Wilson score interval; mean ± standard error for the rest.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from pendulum_lqg.sim import Simulator
+
+FAIL_NONE, FAIL_POLE, FAIL_TRACK, FAIL_DIVERGED = 0, 1, 2, 3
+FAIL_REASONS: dict[int, str] = {FAIL_NONE: "", FAIL_POLE: "pole_fell", FAIL_TRACK: "track_limit",
+                                FAIL_DIVERGED: "diverged"}
+EST_FIELDS = ("rms_est_err_p", "rms_est_err_theta", "rms_est_err_p_dot", "rms_est_err_theta_dot")
+
+#: Columns of one episode row, in order.
+EPISODE_FIELDS: tuple[str, ...] = (
+    "episode", "seed", "success", "failure_reason", "time_to_failure", "duration", "cost",
+    "rms_theta", "max_abs_theta", "rms_p", "max_abs_p", "rms_u", "max_abs_u",
+    "saturated_fraction", *EST_FIELDS, "settling_time",
+)
+
+
+class MetricsAccumulator:
+    """Running sums per episode id; :meth:`rows` turns them into episode records."""
+
+    _SUMS = ("alive", "cost", "theta2", "p2", "u2", "sat", "n_est", "settle",
+             "max_theta", "max_p", "max_u", "fail_time")
+
+    def __init__(self, n: int, sim: Simulator) -> None:
+        self.h, self.k, self.dt = sim.h, sim.k, sim.dt
+        self.Q, self.R, self.u_max = sim.Q, sim.R, sim.u_max
+        self.band = sim.scenario.settle_band
+        self.duration = sim.n_periods * sim.dt
+        self._alloc(max(n, 1))
+
+    def _alloc(self, n: int) -> None:
+        self.size = n
+        for name in self._SUMS:
+            setattr(self, name, np.zeros(n))
+        self.est2 = np.zeros((n, 4))
+        self.reason = np.zeros(n, dtype=np.int8)
+        self.done = np.zeros(n, dtype=bool)
+        self.fail_time[:] = np.nan
+
+    def _grow(self, need: int) -> None:
+        if need <= self.size:
+            return
+        old = {name: getattr(self, name) for name in (*self._SUMS, "est2", "reason", "done")}
+        self._alloc(max(need, 2 * self.size))
+        for name, arr in old.items():
+            getattr(self, name)[: arr.shape[0]] = arr
+
+    def start(self, ids: np.ndarray, x0: np.ndarray) -> None:
+        self._grow(int(np.max(ids, initial=-1)) + 1)
+        self.restart(ids)
+
+    def restart(self, ids: np.ndarray) -> None:
+        self._grow(int(np.max(ids, initial=-1)) + 1)
+        for name in self._SUMS:
+            getattr(self, name)[ids] = 0.0
+        self.fail_time[ids] = np.nan
+        self.est2[ids] = 0.0
+        self.reason[ids] = FAIL_NONE
+        self.done[ids] = False
+
+    def accumulate(self, ids: np.ndarray, x_start: np.ndarray, states: np.ndarray, u: np.ndarray,
+                   x_hat: np.ndarray | None, failed: np.ndarray, reason: np.ndarray,
+                   fail_step: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """Add one control period; returns the period's cost per row."""
+        h, k = self.h, self.k
+        xs = np.concatenate([x_start[:, None, :], states[:, :-1, :]], axis=1)   # (n, k, 4)
+        if failed.any():
+            mask = np.arange(k)[None, :] <= fail_step[:, None]                 # (n, k)
+            t_alive = mask.sum(axis=1) * h
+            xs = np.where(mask[:, :, None], xs, 0.0)
+        else:
+            t_alive = np.full(xs.shape[0], k * h)
+        sq = (xs * xs).sum(axis=1)                                               # (n, 4)
+        cost = h * np.einsum("ni,i->n", sq, self.Q) + self.R * u * u * t_alive
+        self.cost[ids] += cost
+        self.alive[ids] += t_alive
+        self.theta2[ids] += h * sq[:, 1]
+        self.p2[ids] += h * sq[:, 0]
+        self.u2[ids] += u * u * t_alive
+        self.sat[ids] += (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive
+        abs_theta = np.abs(xs[:, :, 1])
+        self.max_theta[ids] = np.maximum(self.max_theta[ids], abs_theta.max(axis=1))
+        self.max_p[ids] = np.maximum(self.max_p[ids], np.abs(xs[:, :, 0]).max(axis=1))
+        self.max_u[ids] = np.maximum(self.max_u[ids], np.abs(u))
+        exceed = abs_theta > self.band
+        if exceed.any():
+            last = k - 1 - np.argmax(exceed[:, ::-1], axis=1)
+            has = exceed.any(axis=1)
+            self.settle[ids[has]] = t[has] + (last[has] + 1) * h
+        if x_hat is not None:
+            err = x_hat - x_start
+            self.est2[ids] += err * err
+            self.n_est[ids] += 1
+        if failed.any():
+            f = ids[failed]
+            self.fail_time[f] = t[failed] + (fail_step[failed] + 1) * h
+            self.reason[f] = reason[failed]
+            self.done[f] = True
+        return cost
+
+    def rows(self, ids: np.ndarray, seeds: np.ndarray | None = None) -> list[dict[str, object]]:
+        """Episode records (``EPISODE_FIELDS``) for the given ids."""
+        out = []
+        for i, e in enumerate(np.asarray(ids)):
+            alive = self.alive[e] if self.alive[e] > 0 else float("nan")
+            n_est = self.n_est[e]
+            est = np.sqrt(self.est2[e] / n_est) if n_est > 0 else np.full(4, np.nan)
+            success = bool(self.reason[e] == FAIL_NONE)
+            row: dict[str, object] = {
+                "episode": int(e),
+                "seed": int(seeds[i]) if seeds is not None else -1,
+                "success": success,
+                "failure_reason": FAIL_REASONS[int(self.reason[e])],
+                "time_to_failure": float(self.fail_time[e]),
+                "duration": float(self.alive[e]),
+                "cost": float(self.cost[e]),
+                "rms_theta": float(np.sqrt(self.theta2[e] / alive)),
+                "max_abs_theta": float(self.max_theta[e]),
+                "rms_p": float(np.sqrt(self.p2[e] / alive)),
+                "max_abs_p": float(self.max_p[e]),
+                "rms_u": float(np.sqrt(self.u2[e] / alive)),
+                "max_abs_u": float(self.max_u[e]),
+                "saturated_fraction": float(self.sat[e] / alive),
+                **{name: float(v) for name, v in zip(EST_FIELDS, est, strict=True)},
+                "settling_time": float(self.settle[e]),
+            }
+            out.append(row)
+        return out
+
+
+def wilson_interval(successes: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """95 % Wilson score interval of a binomial proportion (Wilson 1927)."""
+    if n <= 0:
+        return (float("nan"), float("nan"))
+    p = successes / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def mean_se(values: np.ndarray) -> tuple[float, float]:
+    """Mean and standard error of the finite values (nan if there are none)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return (float("nan"), float("nan"))
+    se = float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else float("nan")
+    return (float(v.mean()), se)
+
+
+SUMMARY_METRICS: tuple[str, ...] = (
+    "cost", "rms_theta", "max_abs_theta", "rms_p", "max_abs_p", "rms_u", "max_abs_u",
+    "saturated_fraction", *EST_FIELDS, "settling_time", "time_to_failure",
+)
+
+
+def summarize(rows: list[dict[str, object]]) -> dict[str, object]:
+    """Aggregate episode rows: success rate with Wilson 95 % CI, mean ± SE of each metric.
+
+    ``cost`` and ``settling_time`` are averaged over the successful episodes only (a failed
+    episode's cost stops at the failure and would flatter it); the others over all episodes, and
+    ``time_to_failure`` over the failures.
+    """
+    n = len(rows)
+    succ = np.array([bool(r["success"]) for r in rows], dtype=bool)
+    s = int(succ.sum())
+    lo, hi = wilson_interval(s, n)
+    out: dict[str, object] = {"episodes": n, "successes": s,
+                              "success_rate": s / n if n else float("nan"),
+                              "success_ci95": [lo, hi]}
+    reasons: dict[str, int] = {}
+    for r in rows:
+        if r["failure_reason"]:
+            reasons[str(r["failure_reason"])] = reasons.get(str(r["failure_reason"]), 0) + 1
+    out["failures"] = reasons
+    for name in SUMMARY_METRICS:
+        vals = np.array([float(r[name]) for r in rows], dtype=float)  # type: ignore[arg-type]
+        if name in ("cost", "settling_time"):
+            vals = vals[succ]
+        elif name == "time_to_failure":
+            vals = vals[~succ]
+        mean, se = mean_se(vals)
+        out[name] = {"mean": mean, "se": se}
+    return out

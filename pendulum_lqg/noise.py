@@ -1,0 +1,183 @@
+"""Process and measurement noise with explicit units, drawn from per-episode generators.
+
+Units (THEORY.md §3) — every parameter says which kind it is:
+
+* ``process_density`` is a **continuous-time spectral density** (diagonal of W):
+  - ``process="state"`` (F = I₄, the lecture model): ``ẋ = f(x, u) + w``, W in
+    ``[m²/s², rad²/s², m²/s⁴, rad²/s⁴] · s``. The simulator adds a jump ``δx ~ N(0, W·T)`` to the
+    state once per control period T — exactly the lecture's ``x ← x + T·w`` with
+    ``w ~ N(0, Σ_w)`` when ``W = Σ_w·T`` (``Σ_w = 0.04·I₄`` at T = 0.01 s gives W = 4·10⁻⁴·I₄).
+  - ``process="force"``: ``M q̈ = … + f``, generalised forces ``f = [N, N·m]`` with density W in
+    ``[N², N²m²]·s``, applied through ``qfrc_applied`` and redrawn every physics step h as
+    ``f ~ N(0, W/h)`` (the sampled equivalent of white noise).
+* ``measurement_variance`` is a **per-sample covariance** (diagonal of V) of ``v`` in
+  ``y[n] = [p, θ] + v[n]``, units ``[m², rad²]``.
+
+``scale`` multiplies the standard deviations of both noises (covariances by ``scale²``); 0 is
+noise-free. The estimator designs use the nominal (``scale = 1``) model unless told otherwise.
+
+Randomness: each episode owns a ``numpy.random.Generator``. Normals are drawn in blocks of
+:data:`CHUNK_PERIODS` control periods with a fixed layout, so an episode's noise is the same whether it
+runs alone or in a batch, and memory does not grow with the episode length.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from pendulum_lqg.errors import ConfigError
+
+#: Control periods of noise drawn at once per episode.
+CHUNK_PERIODS = 256
+
+#: The lecture's per-step process-noise covariance of w (``x ← x + T·w``) and its period.
+LECTURE_W_STEP = 0.04
+LECTURE_PERIOD = 0.01
+LECTURE_V = 0.01
+
+
+def _diag(name: str, value: object, n: int) -> tuple[float, ...]:
+    arr = np.atleast_1d(np.asarray(value, dtype=float)) if not isinstance(value, str) else None
+    if arr is None or arr.ndim != 1 or arr.size not in (1, n):
+        raise ConfigError(f"{name}: expected a number or a list of {n} numbers, got {value!r}")
+    if arr.size == 1:
+        arr = np.full(n, arr[0])
+    if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise ConfigError(f"{name}: expected finite non-negative numbers, got {value!r}")
+    return tuple(float(a) for a in arr)
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """Noise of one scenario (see the module docstring for units).
+
+    Attributes
+    ----------
+    process : "state" (F = I₄) or "force" (generalised forces on slider and hinge)
+    process_density : diagonal of the continuous spectral density W (4 entries for "state",
+        2 for "force")
+    measurement_variance : diagonal of the per-sample covariance V of y = [p, θ]
+    scale : multiplies both noises' standard deviations (0 = noise-free)
+    """
+
+    process: Literal["state", "force"] = "state"
+    process_density: tuple[float, ...] = field(
+        default_factory=lambda: (LECTURE_W_STEP * LECTURE_PERIOD,) * 4)
+    measurement_variance: tuple[float, ...] = (LECTURE_V, LECTURE_V)
+    scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.process not in ("state", "force"):
+            raise ConfigError(f"process: expected 'state' or 'force', got {self.process!r}")
+        n = 4 if self.process == "state" else 2
+        object.__setattr__(self, "process_density",
+                           _diag("process_density", self.process_density, n))
+        object.__setattr__(self, "measurement_variance",
+                           _diag("measurement_variance", self.measurement_variance, 2))
+        try:
+            scale = float(self.scale)
+        except (TypeError, ValueError) as exc:
+            raise ConfigError(f"noise_scale: expected a number ≥ 0, got {self.scale!r}") from exc
+        if not np.isfinite(scale) or scale < 0:
+            raise ConfigError(f"noise_scale: expected a finite number ≥ 0, got {self.scale!r}")
+        object.__setattr__(self, "scale", scale)
+
+    @classmethod
+    def lecture(cls, *, scale: float = 1.0) -> NoiseModel:
+        """The lecture scenario: V = 0.01·I₂ per sample; ``x ← x + T·w``, w ~ N(0, 0.04·I₄) at
+        T = 0.01 s, i.e. a state-noise density W = 0.04 · 0.01 · I₄ = 4·10⁻⁴·I₄."""
+        return cls(scale=scale)
+
+    def with_scale(self, scale: float) -> NoiseModel:
+        return NoiseModel(self.process, self.process_density, self.measurement_variance, scale)
+
+    # ---- matrices for the designs (nominal, i.e. without ``scale``) ------------------------
+    @property
+    def W(self) -> np.ndarray:
+        """Continuous process-noise spectral density (nominal)."""
+        return np.diag(self.process_density)
+
+    @property
+    def V(self) -> np.ndarray:
+        """Per-sample measurement covariance (nominal)."""
+        return np.diag(self.measurement_variance)
+
+    def V_density(self, dt: float) -> np.ndarray:
+        """Measurement density equivalent to per-sample covariance V at period dt: ``V·dt``."""
+        return self.V * dt
+
+    @property
+    def n_process(self) -> int:
+        return 4 if self.process == "state" else 2
+
+
+class NoiseStream:
+    """Per-episode noise for a batch, drawn in fixed blocks from each episode's own generator.
+
+    Each control period consumes, per episode, ``n_proc`` process normals (``4`` for state noise,
+    ``2·k`` for force noise redrawn every physics step) followed by 2 measurement normals.
+    """
+
+    def __init__(self, noise: NoiseModel, *, steps_per_period: int, dt: float, h: float) -> None:
+        self.noise = noise
+        self.k = steps_per_period
+        self.n_proc = 4 if noise.process == "state" else 2 * steps_per_period
+        self.width = self.n_proc + 2
+        s = noise.scale
+        if noise.process == "state":
+            self.proc_std = s * np.sqrt(np.asarray(noise.process_density) * dt)   # δx per period
+        else:
+            self.proc_std = s * np.sqrt(np.asarray(noise.process_density) / h)    # f per step
+        self.meas_std = s * np.sqrt(np.asarray(noise.measurement_variance))
+        self.enabled = s > 0 and (np.any(self.proc_std > 0) or np.any(self.meas_std > 0))
+        self._gens: list[np.random.Generator] = []
+        self._block = np.zeros((0, CHUNK_PERIODS, self.width))
+        self._pos = np.zeros(0, dtype=np.int64)
+
+    def reset(self, generators: list[np.random.Generator], rows: np.ndarray | None = None) -> None:
+        """Attach generators (all rows, or the given rows of an existing batch)."""
+        if rows is None:
+            self._gens = list(generators)
+            n = len(generators)
+            self._block = np.zeros((n, CHUNK_PERIODS, self.width))
+            self._pos = np.full(n, CHUNK_PERIODS, dtype=np.int64)
+        else:
+            for r, g in zip(rows, generators, strict=True):
+                self._gens[r] = g
+            self._pos[rows] = CHUNK_PERIODS
+
+    def draw(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Unit normals for the next period of each row: process (len, n_proc), meas (len, 2)."""
+        if not self.enabled:
+            return np.zeros((rows.size, self.n_proc)), np.zeros((rows.size, 2))
+        pos = self._pos[rows]
+        for r in rows[pos >= CHUNK_PERIODS]:
+            self._block[r] = self._gens[r].standard_normal((CHUNK_PERIODS, self.width))
+            self._pos[r] = 0
+        pos = self._pos[rows]
+        if rows.size == self._pos.size and rows.size and np.all(pos == pos[0]):
+            z = self._block[:, pos[0]]           # common case: the whole batch in step
+        else:
+            z = self._block[rows, pos]
+        self._pos[rows] += 1
+        return z[:, : self.n_proc], z[:, self.n_proc:]
+
+    def select(self, rows: np.ndarray) -> None:
+        """Keep only these rows (their generators and undrawn blocks)."""
+        self._gens = [self._gens[r] for r in rows]
+        self._block = self._block[rows]
+        self._pos = self._pos[rows]
+
+    def state_jump(self, z_proc: np.ndarray) -> np.ndarray:
+        """δx (len, 4) for state noise."""
+        return z_proc * self.proc_std
+
+    def forces(self, z_proc: np.ndarray) -> np.ndarray:
+        """Generalised forces (len, k, 2) for force noise, one per physics step."""
+        return z_proc.reshape(-1, self.k, 2) * self.proc_std
+
+    def measurement(self, z_meas: np.ndarray) -> np.ndarray:
+        return z_meas * self.meas_std

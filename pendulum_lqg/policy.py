@@ -1,0 +1,244 @@
+"""Policies: a controller (state feedback) plus an estimator, ``reset(n)`` / ``act(y) -> u``.
+
+:func:`design_policy` turns a plant, a control period and a noise model into any of the project's
+LQG variants. The policy is an ordinary agent: it sees only the measurement ``y = [p, θ]`` (or the
+true state for ``observer="none"``), knows the actuator limit (so its model uses the force actually
+applied), and is vectorised over a batch of episodes. It knows nothing of gymnasium or Rerun.
+
+Controllers
+    ``lqr``  continuous design ``lqr(A, B, Q, R)``, emulated under sample-and-hold;
+    ``dlqr`` discrete design on the ZOH model with the exact sampled cost weights, so it minimises
+    the very ``J = ∫ xᵀQx + uᵀRu dt`` the benchmark measures (:func:`~pendulum_lqg.design.sampled_cost`).
+Observers
+    ``none`` true state · ``luenberger`` current form, continuous poles mapped by z = e^{sT} ·
+    ``kalman`` steady-state filter (current) form · ``kalman-predictor`` steady-state predictor form ·
+    ``kalman-tv`` time-varying filter from ``M0`` · ``kalman-bucy`` continuous Kalman–Bucy design,
+    its observer ODE discretised by ZOH (a predictor-type recursion).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from scipy.linalg import expm
+
+from pendulum_lqg import design
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.estimators import (
+    CurrentEstimator,
+    Estimator,
+    PredictorEstimator,
+    TimeVaryingKalman,
+    TrueState,
+    mv,
+)
+from pendulum_lqg.linearize import ContinuousModel, discretize_zoh, linearize, steps_per_period
+from pendulum_lqg.noise import NoiseModel
+from pendulum_lqg.plant import Plant
+
+CONTROLLERS: tuple[str, ...] = ("lqr", "dlqr")
+OBSERVERS: tuple[str, ...] = ("none", "luenberger", "kalman", "kalman-predictor", "kalman-tv",
+                              "kalman-bucy")
+Controller = Literal["lqr", "dlqr"]
+Observer = Literal["none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy"]
+
+
+@dataclass(frozen=True)
+class DesignSpec:
+    """Everything a policy design depends on besides the plant, the period and the noise.
+
+    Attributes
+    ----------
+    controller, observer : names from :data:`CONTROLLERS` / :data:`OBSERVERS`
+    Q : diagonal of the state weight (4,), R : input weight (N⁻²)
+    observer_poles : continuous-time Luenberger poles (s-plane), mapped by z = e^{sT}
+    M0 : diagonal of the initial a-priori covariance of the time-varying Kalman filter
+    discretization : model the discrete designs use, "zoh" (exact) or "euler" (first order)
+    """
+
+    controller: str = "dlqr"
+    observer: str = "kalman"
+    Q: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
+    R: float = 1.0
+    observer_poles: tuple[float, ...] = design.DEFAULT_OBSERVER_POLES
+    M0: tuple[float, ...] = (0.01, 0.01, 0.01, 0.01)
+    discretization: str = "zoh"
+
+    def __post_init__(self) -> None:
+        if self.controller not in CONTROLLERS:
+            raise ConfigError(f"controller: unknown {self.controller!r}; expected one of "
+                              + ", ".join(CONTROLLERS))
+        if self.observer not in OBSERVERS:
+            raise ConfigError(f"observer: unknown {self.observer!r}; expected one of "
+                              + ", ".join(OBSERVERS))
+        if self.discretization not in ("zoh", "euler"):
+            raise ConfigError(f"discretization: expected 'zoh' or 'euler', got "
+                              f"{self.discretization!r}")
+        for name, n in (("Q", 4), ("M0", 4)):
+            val = np.atleast_1d(np.asarray(getattr(self, name), dtype=float))
+            if val.size == 1:
+                val = np.full(n, val[0])
+            if val.shape != (n,) or not np.all(np.isfinite(val)) or np.any(val < 0):
+                raise ConfigError(f"{name}: expected {n} finite non-negative numbers (a diagonal), "
+                                  f"got {getattr(self, name)!r}")
+            object.__setattr__(self, name, tuple(float(v) for v in val))
+        r = float(self.R)
+        if not np.isfinite(r) or r <= 0:
+            raise ConfigError(f"R: expected a finite positive number, got {self.R!r}")
+        object.__setattr__(self, "R", r)
+        poles = tuple(complex(p) if isinstance(p, complex) else float(p)
+                      for p in self.observer_poles)
+        object.__setattr__(self, "observer_poles", poles)
+
+    @property
+    def Q_matrix(self) -> np.ndarray:
+        return np.diag(self.Q)
+
+    @property
+    def R_matrix(self) -> np.ndarray:
+        return np.array([[self.R]])
+
+
+@dataclass
+class Policy:
+    """``u = sat(−K x̂)`` with an estimator; vectorised over a batch.
+
+    Attributes
+    ----------
+    K : (1, 4) state-feedback gain
+    estimator : the runtime estimator
+    u_max : actuator limit [N]; the policy saturates its own output so its model sees the
+        applied force
+    name : "<controller>+<observer>"
+    info : design data (gains, poles, matrices) for reports and recordings
+    """
+
+    K: np.ndarray
+    estimator: Estimator
+    u_max: float
+    name: str
+    x_hat0: np.ndarray = field(default_factory=lambda: np.zeros(4))
+    info: dict[str, object] = field(default_factory=dict)
+
+    @property
+    def needs_state(self) -> bool:
+        return self.estimator.needs_state
+
+    def reset(self, n: int, x_hat0: np.ndarray | None = None) -> None:
+        """Start ``n`` episodes; ``x_hat0`` (n, 4) defaults to the policy's ``x_hat0``."""
+        if x_hat0 is None:
+            x_hat0 = np.tile(self.x_hat0, (n, 1))
+        self.estimator.reset(x_hat0)
+
+    def act(self, y: np.ndarray) -> np.ndarray:
+        """One control period: measurement (n, 2) (or state (n, 4)) → force (n,) in newtons."""
+        x_hat = self.estimator.estimate(y)
+        u = np.clip(-mv(self.K, x_hat), -self.u_max, self.u_max)
+        self.estimator.update(u)
+        return u[:, 0]
+
+    def select(self, rows: np.ndarray) -> None:
+        self.estimator.select(rows)
+
+
+def _emulated_observer(A: np.ndarray, B: np.ndarray, C: np.ndarray, L: np.ndarray, dt: float,
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """ZOH of ``x̂̇ = (A − LC)x̂ + Bu + Ly`` with u, y held: ``x̂⁺ = F x̂ + G_u u + G_y y``."""
+    n, m, p = A.shape[0], B.shape[1], C.shape[0]
+    block = np.zeros((n + m + p, n + m + p))
+    block[:n, :n] = A - L @ C
+    block[:n, n:n + m] = B
+    block[:n, n + m:] = L
+    E = expm(block * dt)
+    return E[:n, :n], E[:n, n:n + m], E[:n, n + m:]
+
+
+def noise_design_matrices(plant_lin: ContinuousModel, noise: NoiseModel, dt: float,
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """``(G, W)`` of the continuous process-noise model matching the simulator's injection."""
+    G = np.eye(4) if noise.process == "state" else plant_lin.F
+    return G, noise.W
+
+
+def per_sample_process_covariance(plant_lin: ContinuousModel, noise: NoiseModel, dt: float,
+                                  ) -> np.ndarray:
+    """Covariance ``Q_d`` of the process noise accumulated over one control period.
+
+    State noise is injected as one jump ``δx ~ N(0, W·T)`` per period, so ``Q_d = W·T`` exactly;
+    force noise is integrated through the dynamics (Van Loan).
+    """
+    if noise.process == "state":
+        return noise.W * dt
+    G, W = noise_design_matrices(plant_lin, noise, dt)
+    return design.process_noise_covariance(plant_lin.A, G, W, dt)
+
+
+def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
+                  spec: DesignSpec | None = None, *, linear: ContinuousModel | None = None,
+                  ) -> Policy:
+    """Design the policy ``spec`` for ``plant`` at ``control_period`` with the nominal noise.
+
+    Parameters
+    ----------
+    plant : the (nominal) model the designer believes in
+    control_period : T [s], a multiple of the physics step
+    noise : nominal noise model (its ``scale`` is ignored: designs use the nominal densities)
+    spec : controller / observer choice and weights
+    linear : a precomputed :func:`~pendulum_lqg.linearize.linearize` result (to save time)
+    """
+    spec = spec or DesignSpec()
+    steps_per_period(plant, control_period)
+    dt = float(control_period)
+    lin = linear if linear is not None else linearize(plant)
+    A, B, C = lin.A, lin.B, lin.C
+    if spec.discretization == "zoh":
+        disc = discretize_zoh(lin, dt)
+        Phi, Gamma = disc.Phi, disc.Gamma
+    else:
+        Phi, Gamma = design.euler(A, B, dt)
+    Q, R = spec.Q_matrix, spec.R_matrix
+    info: dict[str, object] = {"A": A, "B": B, "C": C, "Phi": Phi, "Gamma": Gamma, "dt": dt,
+                               "Q": Q, "R": R}
+
+    if spec.controller == "lqr":
+        ctrl = design.lqr(A, B, Q, R)
+    else:
+        Qd, Rd, Nd = design.sampled_cost(A, B, Q, R, dt)
+        ctrl = design.dlqr(Phi, Gamma, Qd, Rd, N=Nd)
+    info["K"], info["P_lqr"], info["controller_poles"] = ctrl.K, ctrl.P, ctrl.poles
+
+    V = noise.V
+    Qd_noise = per_sample_process_covariance(lin, noise, dt)
+    est: Estimator
+    if spec.observer == "none":
+        est = TrueState()
+    elif spec.observer == "luenberger":
+        obs = design.dluenberger(Phi, C, spec.observer_poles, form="current", dt=dt)
+        est = CurrentEstimator(Phi, Gamma, C, obs.L)
+        info["L"], info["observer_poles"] = obs.L, obs.poles
+    elif spec.observer in ("kalman", "kalman-predictor"):
+        kf = design.dkalman(Phi, np.eye(4), C, Qd_noise, V)
+        if spec.observer == "kalman":
+            est = CurrentEstimator(Phi, Gamma, C, kf.L, P=kf.P, M=kf.M)
+            info["L"] = kf.L
+        else:
+            est = PredictorEstimator(Phi - kf.L_pred @ C, Gamma, kf.L_pred, C, P=kf.M, M=kf.M)
+            info["L"] = kf.L_pred
+        info["observer_poles"], info["P_kalman"] = kf.poles, kf.P
+    elif spec.observer == "kalman-tv":
+        M0 = np.diag(spec.M0)
+        est = TimeVaryingKalman(Phi, Gamma, C, Qd_noise, V, M0)
+        kf = design.dkalman(Phi, np.eye(4), C, Qd_noise, V)
+        info["L"], info["observer_poles"], info["M0"] = kf.L, kf.poles, M0
+    else:  # kalman-bucy
+        G, W = noise_design_matrices(lin, noise, dt)
+        kb = design.kalman(A, G, C, W, noise.V_density(dt))
+        F, G_u, G_y = _emulated_observer(A, B, C, kb.L, dt)
+        est = PredictorEstimator(F, G_u, G_y, C, gain=kb.L, P=kb.P)
+        info["L"], info["observer_poles"] = kb.L, np.linalg.eigvals(F)
+        info["observer_poles_continuous"] = kb.poles
+    info["noise_Qd"], info["noise_V"] = Qd_noise, V
+    return Policy(K=ctrl.K, estimator=est, u_max=plant.u_max,
+                  name=f"{spec.controller}+{spec.observer}", info=info)

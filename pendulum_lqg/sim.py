@@ -1,0 +1,534 @@
+"""The one noisy closed loop: sample-and-hold control over MuJoCo physics, batched.
+
+Every caller — ``pendulum-lqg run`` / ``bench`` / ``perf``, the gymnasium environments and the Rerun
+recordings — steps the plant through :class:`Simulator`; no other module steps MuJoCo.
+
+One control period ``n`` (``T = k·h``) for each running episode:
+
+1. draw this period's unit normals from the episode's own generator (:class:`~pendulum_lqg.noise.NoiseStream`);
+2. measure ``y[n] = [p, θ] + v[n]`` (:meth:`Simulator.measure`);
+3. the policy returns a force; it is saturated to the actuator ``ctrlrange``;
+4. ``k`` physics steps with the force held (``mujoco.rollout`` for a batch, or a plain ``mj_step``
+   loop — both paths give bit-identical states); force noise, if chosen, enters through
+   ``qfrc_applied`` at every physics step;
+5. state noise, if chosen, is added to the state at the end of the period: ``x ← x + δx``;
+6. failure detection at every physics step and metrics streamed into per-episode accumulators
+   (:class:`~pendulum_lqg.metrics.MetricsAccumulator`); trajectories are kept only on request.
+
+Failure rule (documented in the README): ``|θ| > theta_max`` (default 0.5 rad), or the cart reaching
+the end of the track ``|p| ≥ track_limit`` (the slider ``range`` in the XML), or a non-finite / runaway
+state (``|x_i| > 10⁶`` or MuJoCo resetting the data after an instability), reason ``diverged``.
+A failed episode stops; the rest of the batch continues.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Literal
+
+import mujoco
+import numpy as np
+from mujoco import rollout as mj_rollout
+
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.linearize import steps_per_period
+from pendulum_lqg.metrics import FAIL_DIVERGED, FAIL_NONE, FAIL_POLE, FAIL_TRACK, MetricsAccumulator
+from pendulum_lqg.noise import NoiseModel, NoiseStream
+from pendulum_lqg.plant import ModelOverrides, Plant
+
+#: Any state component beyond this magnitude counts as divergence.
+RUNAWAY = 1e6
+
+
+def _vector(name: str, value: object, n: int, *, nonneg: bool = False) -> tuple[float, ...]:
+    try:
+        arr = np.atleast_1d(np.asarray(value, dtype=float))
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"{name}: expected {n} numbers, got {value!r}") from exc
+    if arr.size == 1 and n > 1:
+        arr = np.full(n, arr[0])
+    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or (nonneg and np.any(arr < 0)):
+        kind = "non-negative " if nonneg else ""
+        raise ConfigError(f"{name}: expected {n} finite {kind}numbers, got {value!r}")
+    return tuple(float(a) for a in arr)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """The control problem every policy faces: timing, noise, initial state, failure rule, cost.
+
+    Attributes
+    ----------
+    control_period : T [s], an integer multiple of the model's physics step
+    duration : episode length [s] (rounded to whole control periods)
+    noise : process / measurement noise model (``noise.scale`` scales both std devs)
+    x0 : mean initial state ``[p, θ, ṗ, θ̇]``
+    x0_std : standard deviation of the initial state around ``x0`` (drawn per episode)
+    estimate0 : initial estimate, ``"zero"`` (x̂₀ = 0) or ``"true"`` (x̂₀ = x₀)
+    theta_max : failure when ``|θ|`` exceeds this [rad]
+    settle_band : settling time is the last time ``|θ|`` was above this band [rad]
+    cost_Q, cost_R : weights of ``J = ∫ xᵀ diag(Q) x + R u² dt``
+    overrides : model changes of the *simulated* plant (mismatch studies); designs use the
+        nominal model unless told otherwise
+    """
+
+    control_period: float = 0.01
+    duration: float = 10.0
+    noise: NoiseModel = field(default_factory=NoiseModel.lecture)
+    x0: tuple[float, ...] = (0.0, 0.1, 0.0, 0.0)
+    x0_std: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)
+    estimate0: Literal["zero", "true"] = "zero"
+    theta_max: float = 0.5
+    settle_band: float = 0.02
+    cost_Q: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
+    cost_R: float = 1.0
+    overrides: ModelOverrides = field(default_factory=ModelOverrides)
+
+    def __post_init__(self) -> None:
+        for name in ("control_period", "duration", "theta_max", "settle_band", "cost_R"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) \
+                    or not np.isfinite(value) or value <= 0:
+                raise ConfigError(f"{name}: expected a finite positive number, got {value!r}")
+            object.__setattr__(self, name, float(value))
+        object.__setattr__(self, "x0", _vector("x0", self.x0, 4))
+        object.__setattr__(self, "x0_std", _vector("x0_std", self.x0_std, 4, nonneg=True))
+        object.__setattr__(self, "cost_Q", _vector("cost_Q", self.cost_Q, 4, nonneg=True))
+        if self.estimate0 not in ("zero", "true"):
+            raise ConfigError(f"estimate0: expected 'zero' or 'true', got {self.estimate0!r}")
+        if not isinstance(self.noise, NoiseModel):
+            raise ConfigError("noise: expected a NoiseModel")
+        if not isinstance(self.overrides, ModelOverrides):
+            raise ConfigError("overrides: expected a ModelOverrides")
+
+    @property
+    def n_periods(self) -> int:
+        return max(1, round(self.duration / self.control_period))
+
+    def replace(self, **changes: object) -> Scenario:
+        return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
+
+    def to_dict(self) -> dict[str, object]:
+        d = dataclasses.asdict(self)
+        d["overrides"] = {k: v for k, v in d["overrides"].items() if v is not None}
+        return d
+
+
+def episode_seed(seed: int, episode: int) -> int:
+    """The integer seed of episode ``episode`` of a run seeded with ``seed``.
+
+    Derived with ``SeedSequence(seed).spawn``: equal to ``SeedSequence(seed).spawn(N)[episode]``'s
+    first word, for any N. ``numpy.random.default_rng(episode_seed(s, k))`` is the generator of that
+    episode — and also what ``gymnasium.Env.reset(seed=episode_seed(s, k))`` makes, so the same
+    episode can be replayed alone, in a batch, or through the gymnasium environment.
+    """
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ConfigError(f"seed: expected a non-negative integer, got {seed!r}")
+    seq = np.random.SeedSequence(int(seed), spawn_key=(int(episode),))
+    return int(seq.generate_state(1, dtype=np.uint32)[0])
+
+
+@dataclass
+class StepResult:
+    """What one control period returns for the running rows.
+
+    Attributes
+    ----------
+    x : (n, 4) true state at the end of the period (after state noise)
+    cost : (n,) cost accumulated over the period
+    failed : (n,) bool, the episode ended in this period
+    reason : (n,) int failure codes (``metrics.FAIL_*``)
+    states : (n, k, 4) physics-rate states over the period (always available; cheap views)
+    """
+
+    x: np.ndarray
+    cost: np.ndarray
+    failed: np.ndarray
+    reason: np.ndarray
+    states: np.ndarray
+
+
+class Simulator:
+    """A batch of cart-pole episodes stepped one control period at a time.
+
+    Parameters
+    ----------
+    plant : the simulated plant
+    scenario : timing, noise, initial state, failure rule and cost
+    backend : ``"rollout"`` (``mujoco.rollout`` over the batch, several threads) or ``"step"``
+        (plain ``mj_step`` loop, the single-episode path)
+    nthread : rollout threads (default: the number of CPU cores, at most 8)
+
+    Use as a context manager (or call :meth:`close`) to stop the rollout thread pool.
+    """
+
+    def __init__(self, plant: Plant, scenario: Scenario, *,
+                 backend: Literal["rollout", "step"] = "rollout", nthread: int | None = None,
+                 ) -> None:
+        if backend not in ("rollout", "step"):
+            raise ConfigError(f"backend: expected 'rollout' or 'step', got {backend!r}")
+        self.plant, self.scenario, self.backend = plant, scenario, backend
+        self.model = plant.model
+        self.h = plant.timestep
+        self.k = steps_per_period(plant, scenario.control_period)
+        self.dt = self.k * self.h
+        self.n_periods = scenario.n_periods
+        self.u_max = plant.u_max
+        self.track = plant.track_limit
+        self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h)
+        self.Q = np.asarray(scenario.cost_Q)
+        self.R = scenario.cost_R
+        nstate, qpos_cols, qvel_cols = plant.physics_state_layout
+        self._nstate = nstate
+        self._cols = np.concatenate([qpos_cols, qvel_cols])
+        contiguous = np.array_equal(self._cols, np.arange(self._cols[0], self._cols[0] + 4))
+        self._state_slice = slice(self._cols[0], self._cols[0] + 4) if contiguous else self._cols
+        self._time_col = 0
+        self._force_noise = scenario.noise.process == "force" and self.noise.enabled
+        st = mujoco.mjtState
+        self._control_spec = st.mjSTATE_CTRL.value | (
+            st.mjSTATE_QFRC_APPLIED.value if self._force_noise else 0)
+        self._ncontrol = mujoco.mj_stateSize(self.model, self._control_spec)
+        self._nthread = nthread if nthread is not None else min(8, _cpu_count())
+        if self._nthread < 0:
+            raise ConfigError(f"nthread: expected a non-negative integer, got {nthread!r}")
+        self._rollout: mj_rollout.Rollout | None = None
+        if backend == "rollout":
+            self._rollout = mj_rollout.Rollout(nthread=self._nthread if self._nthread > 1 else 0)
+            self._datas = [mujoco.MjData(self.model) for _ in range(max(1, self._nthread))]
+        self._data = mujoco.MjData(self.model)
+        self._capacity = 0
+        self.metrics: MetricsAccumulator | None = None
+
+    # ---- lifecycle ---------------------------------------------------------------------------
+    def close(self) -> None:
+        if self._rollout is not None:
+            self._rollout.close()
+            self._rollout = None
+
+    def __enter__(self) -> Simulator:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __del__(self) -> None:  # the rollout pool owns threads; release them with the object
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    def _ensure_capacity(self, n: int) -> None:
+        if n <= self._capacity:
+            return
+        self._capacity = n
+        self._models = [self.model] * n
+        self._state_out = np.empty((n, self.k, self._nstate))
+        self._sens_out = np.empty((n, self.k, self.model.nsensordata))
+        self._ctrl_buf = np.zeros((n, self.k, self._ncontrol))
+
+    # ---- episodes ----------------------------------------------------------------------------
+    def reset(self, generators: list[np.random.Generator], *, ids: np.ndarray | None = None,
+              rows: np.ndarray | None = None) -> np.ndarray:
+        """Start episodes; returns the initial true states (n, 4).
+
+        Each generator first draws the initial state (4 normals), then the noise blocks.
+
+        Parameters
+        ----------
+        generators : one per episode
+        ids : episode numbers for the metrics (default ``0..n-1``)
+        rows : reset only these rows of the running batch (vector envs' autoreset); ``ids``
+            must then be given for them too
+        """
+        sc = self.scenario
+        z = np.array([g.standard_normal(4) for g in generators]).reshape(-1, 4)
+        x0 = np.asarray(sc.x0) + np.asarray(sc.x0_std) * z
+        if rows is None:
+            n = len(generators)
+            self._ensure_capacity(n)
+            self.ids = np.arange(n) if ids is None else np.asarray(ids)
+            self.x = x0
+            self.t = np.zeros(n)
+            self.period = np.zeros(n, dtype=np.int64)
+            self.noise.reset(generators)
+            self.metrics = MetricsAccumulator(self.ids.max(initial=-1) + 1, self)
+            self._z_proc = np.zeros((n, self.noise.n_proc))
+        else:
+            rows = np.asarray(rows)
+            self.x[rows] = x0
+            self.t[rows] = 0.0
+            self.period[rows] = 0
+            if ids is not None:
+                self.ids[rows] = ids
+            self.noise.reset(generators, rows)
+            assert self.metrics is not None
+            self.metrics.restart(self.ids[rows])
+        self.metrics.start(self.ids if rows is None else self.ids[rows],
+                           x0)
+        return x0.copy()
+
+    @property
+    def n(self) -> int:
+        return self.x.shape[0]
+
+    def measure(self) -> np.ndarray:
+        """Draw this period's noise and return the noisy measurement ``y = [p, θ] + v`` (n, 2)."""
+        rows = np.arange(self.n)
+        z_proc, z_meas = self.noise.draw(rows)
+        self._z_proc = z_proc
+        return self.x[:, :2] + self.noise.measurement(z_meas)
+
+    def noise_free_measurement(self) -> np.ndarray:
+        return self.x[:, :2].copy()
+
+    def step(self, u: np.ndarray, *, x_hat: np.ndarray | None = None) -> StepResult:
+        """Advance every running episode by one control period with force ``u`` (n,) held.
+
+        Parameters
+        ----------
+        u : (n,) requested forces [N] (saturated here to the actuator range)
+        x_hat : (n, 4) the estimate the controller used at this sample, for the estimation-error
+            metric (optional)
+        """
+        u = np.clip(np.asarray(u, dtype=float).reshape(-1), -self.u_max, self.u_max)
+        n = self.n
+        if u.shape[0] != n:
+            raise ConfigError(f"u: expected {n} forces, got {u.shape[0]}")
+        forces = self.noise.forces(self._z_proc) if self._force_noise else None
+        if self.backend == "rollout":
+            states, reset_flag = self._advance_rollout(u, forces)
+        else:
+            states, reset_flag = self._advance_step(u, forces)
+        x_start = self.x
+        # state noise: one jump per period at its end (x ← x + δx)
+        x_end = states[:, -1].copy()
+        if self.scenario.noise.process == "state" and self.noise.enabled:
+            x_end += self.noise.state_jump(self._z_proc)
+        failed, reason, fail_step = self._detect_failure(states, x_end, reset_flag)
+        assert self.metrics is not None
+        cost = self.metrics.accumulate(self.ids, x_start, states, u, x_hat, failed, reason,
+                                       fail_step, self.t)
+        self.t = self.t + self.dt
+        self.period += 1
+        self.x = x_end
+        return StepResult(x=x_end, cost=cost, failed=failed, reason=reason, states=states)
+
+    def select(self, rows: np.ndarray) -> None:
+        """Keep only these rows (drop finished episodes from the batch)."""
+        self.x, self.t, self.period = self.x[rows], self.t[rows], self.period[rows]
+        self.ids = self.ids[rows]
+        self._z_proc = self._z_proc[rows]
+        self.noise.select(rows)
+
+    # ---- physics -----------------------------------------------------------------------------
+    def _initial_physics_state(self) -> np.ndarray:
+        init = np.zeros((self.n, self._nstate))
+        init[:, self._cols] = self.x
+        return init
+
+    def _advance_rollout(self, u: np.ndarray, forces: np.ndarray | None,
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        n = self.n
+        assert self._rollout is not None
+        init = self._initial_physics_state()
+        ctrl = self._ctrl_buf[:n]
+        ctrl[:, :, 0] = u[:, None]
+        if forces is not None:
+            ctrl[:, :, 1:][:, :, self.plant.qvel_index] = forces
+        state_out, sens_out = self._state_out[:n], self._sens_out[:n]
+        self._rollout.rollout(self._models[:n], self._datas, init, ctrl,
+                              control_spec=self._control_spec, skip_checks=True, nstep=self.k,
+                              state=state_out, sensordata=sens_out)
+        # MuJoCo resets the data (time back to 0) when the integration goes unstable, so the
+        # last step's time falls short of k·h.
+        reset_flag = state_out[:, -1, self._time_col] < (self.k - 0.5) * self.h
+        return state_out[:, :, self._state_slice], reset_flag
+
+    def _advance_step(self, u: np.ndarray, forces: np.ndarray | None,
+                      ) -> tuple[np.ndarray, np.ndarray]:
+        m, d = self.model, self._data
+        states = np.empty((self.n, self.k, 4))
+        reset_flag = np.zeros(self.n, dtype=bool)
+        qi, vi = self.plant.qpos_index, self.plant.qvel_index
+        for r in range(self.n):
+            mujoco.mj_resetData(m, d)
+            d.qpos[qi] = self.x[r, :2]
+            d.qvel[vi] = self.x[r, 2:]
+            d.ctrl[0] = u[r]
+            for j in range(self.k):
+                if forces is not None:
+                    d.qfrc_applied[vi] = forces[r, j]
+                mujoco.mj_step(m, d)
+                states[r, j, :2] = d.qpos[qi]
+                states[r, j, 2:] = d.qvel[vi]
+            reset_flag[r] = abs(d.time - self.k * self.h) > 0.5 * self.h
+        return states, reset_flag
+
+    def _detect_failure(self, states: np.ndarray, x_end: np.ndarray, reset_flag: np.ndarray,
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """First failing physics step of each row (or ``k`` if none) and the reason code."""
+        with np.errstate(invalid="ignore"):
+            mag = np.abs(states)
+            # ``not (|x| <= RUNAWAY)`` is true for nan, inf and runaway values alike
+            bad = ~(mag <= RUNAWAY).all(axis=2)
+            pole = mag[:, :, 1] > self.scenario.theta_max
+            track = mag[:, :, 0] >= self.track
+            end_bad = ~(np.abs(x_end) <= RUNAWAY).all(axis=1)
+        bad[:, -1] |= end_bad | reset_flag
+        any_fail = bad | pole | track
+        failed = any_fail.any(axis=1)
+        fail_step = np.where(failed, np.argmax(any_fail, axis=1), self.k)
+        reason = np.full(self.n, FAIL_NONE, dtype=np.int8)
+        if failed.any():
+            idx = np.nonzero(failed)[0]
+            s = fail_step[idx]
+            reason[idx] = np.where(bad[idx, s], FAIL_DIVERGED,
+                                   np.where(pole[idx, s], FAIL_POLE, FAIL_TRACK))
+        return failed, reason, fail_step
+
+
+def _cpu_count() -> int:
+    import os
+
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return max(1, os.cpu_count() or 1)
+
+
+@dataclass
+class Trajectory:
+    """One episode's trajectory (kept only when a caller asks, e.g. for a recording).
+
+    Control-rate arrays have one row per control sample ``n`` (time ``t[n]``); ``states`` holds the
+    physics-rate states with times ``t_physics``.
+
+    Attributes
+    ----------
+    t : (N,) sample times [s]; x : (N, 4) true state at the sample; y : (N, 2) noisy measurement;
+    y_true : (N, 2) noise-free measurement; u : (N,) applied force; x_hat : (N, 4) estimate used;
+    x_prior : (N, 4) a-priori estimate; innovation : (N, 2); P : (N, 4, 4) a-posteriori covariance
+    (nan if the estimator has none); cost : (N,) running cost at the end of each period;
+    t_physics : (N·k,), states : (N·k, 4)
+    """
+
+    episode: int
+    seed: int
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    y_true: np.ndarray
+    u: np.ndarray
+    x_hat: np.ndarray
+    x_prior: np.ndarray
+    innovation: np.ndarray
+    P: np.ndarray
+    cost: np.ndarray
+    t_physics: np.ndarray
+    states: np.ndarray
+    row: dict[str, object] = field(default_factory=dict)
+
+
+@dataclass
+class BatchResult:
+    """Per-episode metric rows (and trajectories on request) of one batch run."""
+
+    rows: list[dict[str, object]]
+    trajectories: list[Trajectory] | None = None
+
+
+class _TrajectoryLog:
+    """Per-period snapshots of the running rows, split per episode at the end."""
+
+    def __init__(self) -> None:
+        self.frames: list[dict[str, np.ndarray]] = []
+
+    def add(self, ids: np.ndarray, **arrays: np.ndarray) -> None:
+        self.frames.append({"ids": ids.copy(), **{k: np.array(v) for k, v in arrays.items()}})
+
+    def split(self, n: int, seeds: list[int], rows: list[dict[str, object]]) -> list[Trajectory]:
+        out = []
+        for e in range(n):
+            parts: dict[str, list[np.ndarray]] = {}
+            for fr in self.frames:
+                hit = np.nonzero(fr["ids"] == e)[0]
+                if hit.size == 0:
+                    continue
+                i = hit[0]
+                for key, arr in fr.items():
+                    if key != "ids":
+                        parts.setdefault(key, []).append(arr[i] if arr.ndim and arr.shape[0] ==
+                                                         fr["ids"].shape[0] else arr)
+            stack = {k: np.array(v) for k, v in parts.items()}
+            cost = np.cumsum(stack["cost"])
+            states = stack["states"].reshape(-1, 4)
+            k = stack["states"].shape[1]
+            h = (stack["t"][1] - stack["t"][0]) / k if stack["t"].size > 1 else np.nan
+            t_phys = (stack["t"][:, None] + h * np.arange(1, k + 1)[None, :]).ravel()
+            out.append(Trajectory(
+                episode=e, seed=seeds[e], t=stack["t"], x=stack["x"], y=stack["y"],
+                y_true=stack["x"][:, :2], u=stack["u"], x_hat=stack["x_hat"],
+                x_prior=stack["x_prior"], innovation=stack["innovation"], P=stack["P"],
+                cost=cost, t_physics=t_phys, states=states, row=rows[e]))
+        return out
+
+
+def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
+                 episodes: list[int] | np.ndarray, backend: Literal["rollout", "step"] = "rollout",
+                 nthread: int | None = None, trajectory: bool = False) -> BatchResult:
+    """Run episodes ``episodes`` of the run seeded ``seed`` through the closed loop.
+
+    Episode ``e`` draws everything from ``default_rng(episode_seed(seed, e))``, so its result does
+    not depend on which other episodes share the batch, on the backend or on the thread count.
+
+    Parameters
+    ----------
+    plant : the simulated plant (possibly mismatched with the policy's design model)
+    scenario : the control problem
+    policy : a :class:`~pendulum_lqg.policy.Policy` (``reset(n, x_hat0)``, ``act(y)``,
+        ``select(rows)``, ``needs_state``, ``estimator``)
+    seed : the run's seed; episodes : episode numbers to run
+    backend, nthread : see :class:`Simulator`
+    trajectory : keep full trajectories (for recordings), not only the streamed metrics
+    """
+    episodes = [int(e) for e in episodes]
+    seeds = [episode_seed(seed, e) for e in episodes]
+    gens = [np.random.default_rng(s) for s in seeds]
+    n = len(episodes)
+    log = _TrajectoryLog() if trajectory else None
+    with Simulator(plant, scenario, backend=backend, nthread=nthread) as sim:
+        x0 = sim.reset(gens)
+        policy.reset(n, x0.copy() if scenario.estimate0 == "true" else np.zeros((n, 4)))
+        est = policy.estimator
+        for _ in range(sim.n_periods):
+            y = sim.measure()
+            x_now = sim.x
+            u = policy.act(x_now if policy.needs_state else y)
+            if log is not None:
+                P = getattr(est, "P", None)
+                P_rows = np.broadcast_to(P if P is not None else np.full((4, 4), np.nan),
+                                         (sim.n, 4, 4))
+                snap = dict(t=sim.t, x=x_now, y=y, u=np.clip(u, -sim.u_max, sim.u_max),
+                            x_hat=est.x_hat, x_prior=est.x_prior, innovation=est.innovation,
+                            P=P_rows)
+            res = sim.step(u, x_hat=est.x_hat)
+            if log is not None:
+                log.add(sim.ids, cost=res.cost, states=res.states, **snap)
+            if res.failed.any():
+                keep = np.nonzero(~res.failed)[0]
+                sim.select(keep)
+                policy.select(keep)
+                if keep.size == 0:
+                    break
+        assert sim.metrics is not None
+        rows = sim.metrics.rows(np.arange(n), np.array(seeds))
+    for row, e in zip(rows, episodes, strict=True):
+        row["episode"] = e
+    trajectories = log.split(n, seeds, rows) if log is not None else None
+    if trajectories is not None:
+        for tr, e in zip(trajectories, episodes, strict=True):
+            tr.episode = e
+    return BatchResult(rows=rows, trajectories=trajectories)
+
