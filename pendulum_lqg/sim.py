@@ -5,7 +5,7 @@ recordings — steps the plant through :class:`Simulator`; no other module steps
 
 One control period ``n`` (``T = k·h``) for each running episode:
 
-1. draw this period's unit normals from the episode's own generator (:class:`~pendulum_lqg.noise.NoiseStream`);
+1. draw this period's unit normals from the episode's own generator (:class:`~.noise.NoiseStream`);
 2. measure ``y[n] = [p, θ] + v[n]`` (:meth:`Simulator.measure`);
 3. the policy returns a force; it is saturated to the actuator ``ctrlrange``;
 4. ``k`` physics steps with the force held (``mujoco.rollout`` for a batch, or a plain ``mj_step``
