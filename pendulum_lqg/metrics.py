@@ -36,6 +36,36 @@ EPISODE_FIELDS: tuple[str, ...] = (
 )
 
 
+def period_integrals(x_start: np.ndarray, states: np.ndarray, u: np.ndarray, failed: np.ndarray,
+                     fail_step: np.ndarray, *, h: float, Q: np.ndarray, R: float,
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The integrals of one control period — the one definition of the period's cost.
+
+    Parameters
+    ----------
+    x_start : (n, 4) state at the start of the period; states : (n, k, 4) state after each
+    physics step; u : (n,) applied (saturated) force; failed : (n,) bool; fail_step : (n,) first
+    failing physics step (``k`` if none); h : physics step; Q : (4,) diagonal; R : input weight
+
+    Returns
+    -------
+    xs : (n, k, 4) state at the start of each alive physics step (0 after a failure);
+    t_alive : (n,) alive time in the period; sq : (n, 4) ``Σ xs²``;
+    cost : (n,) ``∫ xᵀ diag(Q) x + R u² dt`` over the alive part of the period
+    """
+    k = states.shape[1]
+    xs = np.concatenate([x_start[:, None, :], states[:, :-1, :]], axis=1)   # (n, k, 4)
+    if failed.any():
+        mask = np.arange(k)[None, :] <= fail_step[:, None]                 # (n, k)
+        t_alive = mask.sum(axis=1) * h
+        xs = np.where(mask[:, :, None], xs, 0.0)
+    else:
+        t_alive = np.full(xs.shape[0], k * h)
+    sq = (xs * xs).sum(axis=1)                                               # (n, 4)
+    cost = h * np.einsum("ni,i->n", sq, Q) + R * u * u * t_alive
+    return xs, t_alive, sq, cost
+
+
 class MetricsAccumulator:
     """Running sums per episode id; :meth:`rows` turns them into episode records."""
 
@@ -84,15 +114,8 @@ class MetricsAccumulator:
                    fail_step: np.ndarray, t: np.ndarray) -> np.ndarray:
         """Add one control period; returns the period's cost per row."""
         h, k = self.h, self.k
-        xs = np.concatenate([x_start[:, None, :], states[:, :-1, :]], axis=1)   # (n, k, 4)
-        if failed.any():
-            mask = np.arange(k)[None, :] <= fail_step[:, None]                 # (n, k)
-            t_alive = mask.sum(axis=1) * h
-            xs = np.where(mask[:, :, None], xs, 0.0)
-        else:
-            t_alive = np.full(xs.shape[0], k * h)
-        sq = (xs * xs).sum(axis=1)                                               # (n, 4)
-        cost = h * np.einsum("ni,i->n", sq, self.Q) + self.R * u * u * t_alive
+        xs, t_alive, sq, cost = period_integrals(x_start, states, u, failed, fail_step,
+                                                 h=h, Q=self.Q, R=self.R)
         self.cost[ids] += cost
         self.alive[ids] += t_alive
         self.theta2[ids] += h * sq[:, 1]

@@ -242,3 +242,45 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
     info["noise_Qd"], info["noise_V"] = Qd_noise, V
     return Policy(K=ctrl.K, estimator=est, u_max=plant.u_max,
                   name=f"{spec.controller}+{spec.observer}", info=info)
+
+
+def design_all(plant: Plant, control_period: float, noise: NoiseModel,
+               spec: DesignSpec | None = None) -> dict[str, object]:
+    """Every design of the project for one plant and period (what ``pendulum-lqg design`` prints).
+
+    Returns plain arrays: the linearisation (``A, B, C, D``), the ZOH and ``mjd_transitionFD``
+    discretisations, structure reports, continuous / discrete LQR, Kalman–Bucy / discrete Kalman
+    (filter and predictor gains), continuous / discrete Luenberger, and the separation checks of the
+    continuous and the discrete (current-form) LQG loops.
+    """
+    from pendulum_lqg.linearize import discretize_transition
+
+    spec = spec or DesignSpec()
+    steps_per_period(plant, control_period)
+    dt = float(control_period)
+    lin = linearize(plant)
+    zoh_model = discretize_zoh(lin, dt)
+    fd_model = discretize_transition(plant, dt)
+    A, B, C = lin.A, lin.B, lin.C
+    Phi, Gamma = zoh_model.Phi, zoh_model.Gamma
+    Q, R = spec.Q_matrix, spec.R_matrix
+    Qd, Rd, Nd = design.sampled_cost(A, B, Q, R, dt)
+    G, W = noise_design_matrices(lin, noise, dt)
+    Qd_noise = per_sample_process_covariance(lin, noise, dt)
+    out: dict[str, object] = {
+        "linear": lin, "zoh": zoh_model, "transition_fd": fd_model,
+        "structure": lin.structure(), "structure_discrete": zoh_model.structure(),
+        "open_loop_poles": np.linalg.eigvals(A),
+        "lqr": design.lqr(A, B, Q, R),
+        "dlqr": design.dlqr(Phi, Gamma, Qd, Rd, N=Nd),
+        "kalman": design.kalman(A, G, C, W, noise.V_density(dt)),
+        "dkalman": design.dkalman(Phi, np.eye(4), C, Qd_noise, V := noise.V),
+        "luenberger": design.luenberger(A, C, spec.observer_poles),
+        "dluenberger": design.dluenberger(Phi, C, spec.observer_poles, form="current", dt=dt),
+        "weights": {"Q": Q, "R": R, "Qd": Qd, "Rd": Rd, "Nd": Nd, "W": W, "V": V,
+                    "W_per_sample": Qd_noise, "V_density": noise.V_density(dt), "G": G},
+        "dt": dt, "steps_per_period": steps_per_period(plant, dt),
+    }
+    out["lqg"] = design.lqg(A, B, C, out["lqr"].K, out["kalman"].L, form="continuous")
+    out["dlqg"] = design.lqg(Phi, Gamma, C, out["dlqr"].K, out["dkalman"].L, form="current")
+    return out

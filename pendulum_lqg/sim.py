@@ -33,7 +33,14 @@ from mujoco import rollout as mj_rollout
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.linearize import steps_per_period
-from pendulum_lqg.metrics import FAIL_DIVERGED, FAIL_NONE, FAIL_POLE, FAIL_TRACK, MetricsAccumulator
+from pendulum_lqg.metrics import (
+    FAIL_DIVERGED,
+    FAIL_NONE,
+    FAIL_POLE,
+    FAIL_TRACK,
+    MetricsAccumulator,
+    period_integrals,
+)
 from pendulum_lqg.noise import NoiseModel, NoiseStream
 from pendulum_lqg.plant import ModelOverrides, Plant
 
@@ -159,13 +166,17 @@ class Simulator:
     backend : ``"rollout"`` (``mujoco.rollout`` over the batch, several threads) or ``"step"``
         (plain ``mj_step`` loop, the single-episode path)
     nthread : rollout threads (default: the number of CPU cores, at most 8)
+    streamed_metrics : keep the per-episode metric accumulators (:attr:`metrics`). ``False``
+        computes only each period's cost (the same :func:`~pendulum_lqg.metrics.period_integrals`)
+        — what the gymnasium environments need, at a lower cost per step.
 
-    Use as a context manager (or call :meth:`close`) to stop the rollout thread pool.
+    Use as a context manager (or call :meth:`close`) to stop the rollout thread pool. A simulator
+    pickles (the thread pool is recreated on unpickling).
     """
 
     def __init__(self, plant: Plant, scenario: Scenario, *,
                  backend: Literal["rollout", "step"] = "rollout", nthread: int | None = None,
-                 ) -> None:
+                 streamed_metrics: bool = True) -> None:
         if backend not in ("rollout", "step"):
             raise ConfigError(f"backend: expected 'rollout' or 'step', got {backend!r}")
         self.plant, self.scenario, self.backend = plant, scenario, backend
@@ -199,6 +210,7 @@ class Simulator:
             self._datas = [mujoco.MjData(self.model) for _ in range(max(1, self._nthread))]
         self._data = mujoco.MjData(self.model)
         self._capacity = 0
+        self._streamed = bool(streamed_metrics)
         self.metrics: MetricsAccumulator | None = None
 
     # ---- lifecycle ---------------------------------------------------------------------------
@@ -212,6 +224,16 @@ class Simulator:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+    def __getstate__(self) -> dict[str, object]:
+        state = self.__dict__.copy()
+        state["_rollout"] = None                 # a thread pool does not pickle
+        return state
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__dict__.update(state)
+        if self.backend == "rollout":
+            self._rollout = mj_rollout.Rollout(nthread=self._nthread if self._nthread > 1 else 0)
 
     def __del__(self) -> None:  # the rollout pool owns threads; release them with the object
         try:
@@ -253,7 +275,8 @@ class Simulator:
             self.t = np.zeros(n)
             self.period = np.zeros(n, dtype=np.int64)
             self.noise.reset(generators)
-            self.metrics = MetricsAccumulator(self.ids.max(initial=-1) + 1, self)
+            if self._streamed:
+                self.metrics = MetricsAccumulator(self.ids.max(initial=-1) + 1, self)
             self._z_proc = np.zeros((n, self.noise.n_proc))
         else:
             rows = np.asarray(rows)
@@ -263,22 +286,31 @@ class Simulator:
             if ids is not None:
                 self.ids[rows] = ids
             self.noise.reset(generators, rows)
-            assert self.metrics is not None
-            self.metrics.restart(self.ids[rows])
-        self.metrics.start(self.ids if rows is None else self.ids[rows],
-                           x0)
+            if self.metrics is not None:
+                self.metrics.restart(self.ids[rows])
+        if self.metrics is not None:
+            self.metrics.start(self.ids if rows is None else self.ids[rows], x0)
         return x0.copy()
 
     @property
     def n(self) -> int:
         return self.x.shape[0]
 
-    def measure(self) -> np.ndarray:
-        """Draw this period's noise and return the noisy measurement ``y = [p, θ] + v`` (n, 2)."""
-        rows = np.arange(self.n)
+    def measure(self, rows: np.ndarray | None = None) -> np.ndarray:
+        """Draw this period's noise and return the noisy measurement ``y = [p, θ] + v`` (n, 2).
+
+        ``rows`` measures only those rows (len(rows), 2) and draws noise for them only — for vector
+        environments, whose rows end and restart at different periods. Every row must be measured
+        once before each :meth:`step`.
+        """
+        if rows is None:
+            z_proc, z_meas = self.noise.draw(np.arange(self.n))
+            self._z_proc = z_proc
+            return self.x[:, :2] + self.noise.measurement(z_meas)
+        rows = np.asarray(rows)
         z_proc, z_meas = self.noise.draw(rows)
-        self._z_proc = z_proc
-        return self.x[:, :2] + self.noise.measurement(z_meas)
+        self._z_proc[rows] = z_proc
+        return self.x[rows, :2] + self.noise.measurement(z_meas)
 
     def noise_free_measurement(self) -> np.ndarray:
         return self.x[:, :2].copy()
@@ -307,9 +339,12 @@ class Simulator:
         if self.scenario.noise.process == "state" and self.noise.enabled:
             x_end += self.noise.state_jump(self._z_proc)
         failed, reason, fail_step = self._detect_failure(states, x_end, reset_flag)
-        assert self.metrics is not None
-        cost = self.metrics.accumulate(self.ids, x_start, states, u, x_hat, failed, reason,
-                                       fail_step, self.t)
+        if self.metrics is not None:
+            cost = self.metrics.accumulate(self.ids, x_start, states, u, x_hat, failed, reason,
+                                           fail_step, self.t)
+        else:
+            cost = period_integrals(x_start, states, u, failed, fail_step, h=self.h, Q=self.Q,
+                                    R=self.R)[3]
         self.t = self.t + self.dt
         self.period += 1
         self.x = x_end
@@ -369,11 +404,20 @@ class Simulator:
     def _detect_failure(self, states: np.ndarray, x_end: np.ndarray, reset_flag: np.ndarray,
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """First failing physics step of each row (or ``k`` if none) and the reason code."""
+        sc = self.scenario
         with np.errstate(invalid="ignore"):
+            # fast path, the common case: every value finite and inside every limit (the checks
+            # below then find no failure; a nan fails ``<=`` and takes the full path)
             mag = np.abs(states)
+            if (self.n and not reset_flag.any() and mag.max() <= RUNAWAY
+                    and np.abs(x_end).max() <= RUNAWAY
+                    and mag[:, :, 1].max() <= sc.theta_max and mag[:, :, 0].max() < self.track):
+                n = self.n
+                return (np.zeros(n, dtype=bool), np.full(n, FAIL_NONE, dtype=np.int8),
+                        np.full(n, self.k))
             # ``not (|x| <= RUNAWAY)`` is true for nan, inf and runaway values alike
             bad = ~(mag <= RUNAWAY).all(axis=2)
-            pole = mag[:, :, 1] > self.scenario.theta_max
+            pole = mag[:, :, 1] > sc.theta_max
             track = mag[:, :, 0] >= self.track
             end_bad = ~(np.abs(x_end) <= RUNAWAY).all(axis=1)
         bad[:, -1] |= end_bad | reset_flag

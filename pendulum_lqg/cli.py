@@ -1,0 +1,551 @@
+"""The ``pendulum-lqg`` command: ``design``, ``run``, ``bench``, ``perf``.
+
+Only argument parsing and presentation live here; every computation is a library call. Heavy
+imports (numpy, MuJoCo, python-control, rich) happen inside the commands so ``--help`` is instant.
+Bad input prints one line ``error: …`` naming the parameter and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+EXIT_USAGE = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, status 2, no traceback
+        self.print_usage(sys.stderr)
+        print(f"error: {message}", file=sys.stderr)
+        raise SystemExit(EXIT_USAGE)
+
+
+def _floats(text: str) -> list[float]:
+    try:
+        vals = [float(t) for t in text.replace(" ", "").split(",") if t]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+    if not vals or not all(math.isfinite(v) for v in vals):
+        raise argparse.ArgumentTypeError(f"expected finite comma-separated numbers, got {text!r}")
+    return vals
+
+
+def _complexes(text: str) -> list[complex]:
+    try:
+        vals = [complex(t.replace("i", "j")) for t in text.replace(" ", "").split(",") if t]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated poles like -0.4,-0.5 or -1+2j,-1-2j, got {text!r}") from None
+    return vals
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return v
+
+
+def _nonneg_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
+    return v
+
+
+def _number(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return v
+
+
+CONTROLLERS = ("lqr", "dlqr")
+OBSERVERS = ("none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy")
+
+
+def _add_design_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("design")
+    g.add_argument("--dt", type=_number, default=0.01, metavar="T",
+                   help="control period T in seconds, a multiple of the model's physics step "
+                        "(default 0.01)")
+    g.add_argument("--q", type=_floats, default=None, metavar="Q1,..,Q4",
+                   help="diagonal of the LQR state weight Q (default 1,1,1,1)")
+    g.add_argument("--r", type=_number, default=None, help="LQR input weight R in N⁻² (default 1)")
+    g.add_argument("--observer-poles", type=_complexes, default=None, metavar="P1,..,P4",
+                   help="continuous-time Luenberger poles (s-plane; default -0.4,-0.5,-0.6,-0.7); "
+                        "discrete designs use z = exp(s·T)")
+    g.add_argument("--w", type=_floats, default=None, metavar="W",
+                   help="process-noise spectral density, diagonal (units²·s; default the lecture's "
+                        "4e-4 on every state)")
+    g.add_argument("--v", type=_floats, default=None, metavar="V",
+                   help="measurement-noise covariance per sample, diagonal (m², rad²; default 0.01)")
+    g.add_argument("--process-noise", choices=("state", "force"), default="state",
+                   help="where process noise enters: the state (F = I₄, lecture) or generalised "
+                        "forces on slider and hinge (default state)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="pendulum-lqg",
+                     description="LQG control of a MuJoCo cart-pole under noise: designs, noisy "
+                                 "closed-loop runs and benchmarks.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("design", help="print the linearisation and every controller/observer design",
+                       description="Linearise the MuJoCo cart-pole about the upright and print "
+                                   "continuous/discrete LQR, Kalman and Luenberger designs.")
+    _add_design_options(p)
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+
+    p = sub.add_parser("run", help="run seeded noisy episodes of one policy and summarise them")
+    p.add_argument("--controller", choices=CONTROLLERS, default="dlqr")
+    p.add_argument("--observer", choices=OBSERVERS, default="kalman")
+    p.add_argument("--episodes", type=_positive_int, default=100)
+    p.add_argument("--seed", type=_nonneg_int, default=0)
+    p.add_argument("--duration", type=_number, default=10.0, help="episode length in s (default 10)")
+    p.add_argument("--noise-scale", type=_number, default=1.0,
+                   help="multiplies both noises' standard deviations (0 = noise-free); the "
+                        "estimators stay designed for the nominal noise")
+    p.add_argument("--theta0", type=_number, default=0.1, help="initial pole angle in rad")
+    p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
+                   help="initial estimate: x̂₀ = 0 (default) or the true x₀")
+    p.add_argument("--backend", choices=("rollout", "step"), default="rollout")
+    p.add_argument("--nthread", type=_nonneg_int, default=None, help="rollout threads")
+    p.add_argument("--record", metavar="FILE.rrd", default=None,
+                   help="write a Rerun recording of every episode")
+    p.add_argument("--spawn", action="store_true", help="open a Rerun viewer with the recording")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    _add_design_options(p)
+
+    p = sub.add_parser("bench", help="run an experiment grid from experiments/*.toml")
+    p.add_argument("experiment", help="name of a file in experiments/ (e.g. lecture) or a TOML path")
+    p.add_argument("--episodes", type=_positive_int, default=None,
+                   help="episodes per configuration (default: the file's)")
+    p.add_argument("--seed", type=_nonneg_int, default=None, help="seed (default: the file's)")
+    p.add_argument("--out", default=None, help="results folder (default results/<name>)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing results folder")
+    p.add_argument("--resume", action="store_true", help="complete an interrupted sweep")
+    p.add_argument("--record", metavar="DIR", default=None,
+                   help="record the worst/median/best/first-failing episode of each configuration")
+    p.add_argument("--nthread", type=_nonneg_int, default=None, help="rollout threads")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    p = sub.add_parser("perf", help="throughput: closed loop vs raw mujoco.rollout, single path, memory")
+    p.add_argument("--episodes", type=_positive_int, default=1024)
+    p.add_argument("--duration", type=_number, default=2.0, help="seconds simulated per episode")
+    p.add_argument("--nthread", type=_nonneg_int, default=None)
+    p.add_argument("--repeats", type=_positive_int, default=3)
+    p.add_argument("--memory", action="store_true",
+                   help="also measure peak memory of 1000-episode benches of 2 s and 10 s")
+    p.add_argument("--json", action="store_true")
+    return parser
+
+
+# ---- helpers -------------------------------------------------------------------------------------
+def _jsonable(obj: Any) -> Any:
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, complex | np.complexfloating):
+        return [_jsonable(float(obj.real)), _jsonable(float(obj.imag))]
+    if isinstance(obj, np.floating | float):
+        f = float(obj)
+        return f if math.isfinite(f) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def _noise_from_args(args: argparse.Namespace, scale: float = 1.0) -> Any:
+    from pendulum_lqg.noise import NoiseModel
+
+    kw: dict[str, Any] = {"process": args.process_noise, "scale": scale}
+    if args.w is not None:
+        kw["process_density"] = args.w
+    elif args.process_noise == "force":
+        raise _cfg_error("--w: force noise needs its density (N²·s, N²m²·s), e.g. --w 0.01,0.001")
+    if args.v is not None:
+        kw["measurement_variance"] = args.v
+    return NoiseModel(**kw)
+
+
+def _cfg_error(msg: str) -> Exception:
+    from pendulum_lqg.errors import ConfigError
+
+    return ConfigError(msg)
+
+
+def _spec_from_args(args: argparse.Namespace, controller: str = "dlqr", observer: str = "kalman",
+                    ) -> Any:
+    from pendulum_lqg.policy import DesignSpec
+
+    kw: dict[str, Any] = {"controller": controller, "observer": observer}
+    if args.q is not None:
+        kw["Q"] = tuple(args.q)
+    if args.r is not None:
+        kw["R"] = args.r
+    if args.observer_poles is not None:
+        kw["observer_poles"] = tuple(args.observer_poles)
+    return DesignSpec(**kw)
+
+
+# ---- design --------------------------------------------------------------------------------------
+def cmd_design(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from pendulum_lqg.plant import load_plant
+    from pendulum_lqg.policy import design_all
+
+    plant = load_plant()
+    noise = _noise_from_args(args)
+    spec = _spec_from_args(args)
+    d = design_all(plant, args.dt, noise, spec)
+    lin, zoh, fd = d["linear"], d["zoh"], d["transition_fd"]
+    st, std = d["structure"], d["structure_discrete"]
+    data = {
+        "model": str(plant.path), "parameters": plant.parameters(), "dt": d["dt"],
+        "steps_per_period": d["steps_per_period"],
+        "A": lin.A, "B": lin.B, "C": lin.C, "D": lin.D, "F_generalised_forces": lin.F,
+        "open_loop_poles": d["open_loop_poles"],
+        "Phi": zoh.Phi, "Gamma": zoh.Gamma,
+        "Phi_transition_fd": fd.Phi, "Gamma_transition_fd": fd.Gamma,
+        "zoh_vs_transition_fd_max_abs": max(float(np.max(np.abs(zoh.Phi - fd.Phi))),
+                                            float(np.max(np.abs(zoh.Gamma - fd.Gamma)))),
+        "structure": {"controllability_rank": st.controllability_rank,
+                      "observability_rank": st.observability_rank,
+                      "uncontrollable_modes_pbh": st.uncontrollable_modes,
+                      "unobservable_modes_pbh": st.unobservable_modes,
+                      "stabilizable": st.stabilizable, "detectable": st.detectable,
+                      "discrete_stabilizable": std.stabilizable,
+                      "discrete_detectable": std.detectable},
+        "weights": d["weights"],
+        "K_lqr": d["lqr"].K, "K_lqr_poles": d["lqr"].poles, "P_lqr": d["lqr"].P,
+        "K_dlqr": d["dlqr"].K, "K_dlqr_poles": d["dlqr"].poles, "P_dlqr": d["dlqr"].P,
+        "L_kalman": d["kalman"].L, "L_kalman_poles": d["kalman"].poles, "P_kalman": d["kalman"].P,
+        "L_dkalman": d["dkalman"].L, "L_dkalman_poles": d["dkalman"].poles,
+        "L_dkalman_predictor": d["dkalman"].L_pred, "M_dkalman": d["dkalman"].M,
+        "P_dkalman": d["dkalman"].P,
+        "L_luenberger": d["luenberger"].L, "L_luenberger_poles": d["luenberger"].poles,
+        "L_dluenberger": d["dluenberger"].L, "L_dluenberger_poles": d["dluenberger"].poles,
+        "separation": {"continuous_max_error": d["lqg"].separation_error,
+                       "discrete_max_error": d["dlqg"].separation_error,
+                       "continuous_closed_loop_poles": d["lqg"].poles,
+                       "discrete_closed_loop_poles": d["dlqg"].poles},
+    }
+    if args.json:
+        print(json.dumps(_jsonable(data), indent=2))
+        return 0
+    _print_design(data, plant)
+    return 0
+
+
+def _mat(M: Any, indent: int = 4) -> str:
+    import numpy as np
+
+    M = np.atleast_2d(np.asarray(M, dtype=float))
+    cells = [[f"{v:.6g}" for v in row] for row in M]
+    width = max(len(c) for row in cells for c in row)
+    pad = " " * indent
+    return "\n".join(pad + "[" + "  ".join(c.rjust(width) for c in row) + "]" for row in cells)
+
+
+def _poles(p: Any) -> str:
+    import numpy as np
+
+    p = np.asarray(p, dtype=complex)
+    p = p[np.lexsort((p.imag, p.real))]
+    out = []
+    for z in p:
+        out.append(f"{z.real:.6g}" if abs(z.imag) < 1e-12 else f"{z.real:.6g}{z.imag:+.6g}j")
+    return ", ".join(out) or "none"
+
+
+def _print_design(d: dict[str, Any], plant: Any) -> None:
+    par = d["parameters"]
+    s = d["structure"]
+    w = d["weights"]
+    lines = [
+        f"pendulum_lqg design — {d['model']}",
+        "model (read from the XML): " + ", ".join(f"{k}={v:.6g}" for k, v in par.items()),
+        "state x = [p, θ, ṗ, θ̇], input u = cart force [N], output y = [p, θ]; "
+        f"T = {d['dt']:g} s = {d['steps_per_period']} physics steps",
+        "",
+        "Linearisation about the upright (central differences of mj_forward)",
+    ]
+    for key in ("A", "B", "C", "D"):
+        lines += [f"  {key} =", _mat(d[key])]
+    lines += [f"  open-loop poles: {_poles(d['open_loop_poles'])}",
+              f"  controllability: rank {s['controllability_rank']}/4, PBH-uncontrollable modes: "
+              f"{_poles(s['uncontrollable_modes_pbh'])}, stabilisable: {s['stabilizable']}",
+              f"  observability:   rank {s['observability_rank']}/4, PBH-unobservable modes: "
+              f"{_poles(s['unobservable_modes_pbh'])}, detectable: {s['detectable']}",
+              "", f"Discrete model at T = {d['dt']:g} s (exact ZOH)"]
+    for key in ("Phi", "Gamma"):
+        lines += [f"  {key} =", _mat(d[key])]
+    lines += [f"  max |ZOH − composed mjd_transitionFD| = {d['zoh_vs_transition_fd_max_abs']:.3g}"
+              " (the Euler integrator's O(h) error)", ""]
+    lines += ["Weights and noise",
+              f"  Q = diag{tuple(float(v) for v in w['Q'].diagonal())}, R = {float(w['R'][0, 0]):g}"
+              "; DLQR uses their exact sampled-data equivalents (Qd, Rd, Nd)",
+              f"  process noise density W = diag{tuple(float(v) for v in w['W'].diagonal())} "
+              "(units²·s), per sample Qd = W·T",
+              f"  measurement covariance V = diag{tuple(float(v) for v in w['V'].diagonal())} per "
+              "sample (Kalman–Bucy uses the density V·T)", ""]
+    rows = [
+        ("Continuous LQR, u = −K x", "K_lqr", "K_lqr_poles", "s"),
+        ("Discrete LQR (ZOH model, sampled cost)", "K_dlqr", "K_dlqr_poles", "z"),
+        ("Kalman–Bucy (continuous)", "L_kalman", "L_kalman_poles", "s"),
+        ("Discrete Kalman, filter (current-estimate) gain L", "L_dkalman", "L_dkalman_poles", "z"),
+        ("Discrete Kalman, predictor gain L_pred = Φ L (python-control dlqe)",
+         "L_dkalman_predictor", "L_dkalman_poles", "z"),
+        ("Luenberger (continuous poles)", "L_luenberger", "L_luenberger_poles", "s"),
+        ("Luenberger (discrete, current form, z = exp(sT))", "L_dluenberger",
+         "L_dluenberger_poles", "z"),
+    ]
+    for title, gain, poles, plane in rows:
+        lines += [title, _mat(d[gain]), f"    poles ({plane}): {_poles(d[poles])}", ""]
+    sep = d["separation"]
+    lines.append("Separation principle: eig(LQG loop) = eig(A − BK) ∪ eig(A − LC), max mismatch "
+                 f"{sep['continuous_max_error']:.2g} (continuous LQR + Kalman–Bucy), "
+                 f"{sep['discrete_max_error']:.2g} (DLQR + discrete Kalman, current form)")
+    print("\n".join(lines))
+
+
+# ---- run -----------------------------------------------------------------------------------------
+def cmd_run(args: argparse.Namespace) -> int:
+    from pendulum_lqg.metrics import summarize
+    from pendulum_lqg.plant import load_plant
+    from pendulum_lqg.policy import design_policy
+    from pendulum_lqg.sim import Scenario, run_episodes
+
+    plant = load_plant()
+    noise = _noise_from_args(args, scale=args.noise_scale)
+    scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,
+                        x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0)
+    spec = _spec_from_args(args, args.controller, args.observer)
+    policy = design_policy(plant, scenario.control_period, noise, spec)
+    recording = args.record is not None or args.spawn
+    res = run_episodes(plant, scenario, policy, seed=args.seed, episodes=range(args.episodes),
+                       backend=args.backend, nthread=args.nthread, trajectory=recording)
+    summary = summarize(res.rows)
+    config = {"policy": policy.name, "seed": args.seed, "episodes": args.episodes,
+              "backend": args.backend, "scenario": scenario.to_dict(),
+              "design": _dataclass_dict(spec), "model": str(plant.path)}
+    out = {"config": config, "success_rate": summary["success_rate"],
+           "success_ci95": summary["success_ci95"], "summary": summary, "episodes": res.rows}
+    if recording:
+        from pendulum_lqg.record import record_episodes
+
+        stats = record_episodes(res.trajectories, plant=plant, scenario=scenario, policy=policy,
+                                config=config, path=args.record, spawn=args.spawn)
+        print(f"recording: {stats}", file=sys.stderr)
+    if args.json:
+        print(json.dumps(_jsonable(out), indent=2))
+    else:
+        _print_summary(policy.name, config, summary)
+    return 0
+
+
+def _dataclass_dict(obj: Any) -> dict[str, Any]:
+    import dataclasses
+
+    return dataclasses.asdict(obj)
+
+
+def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    con = Console()
+    sc = config["scenario"]
+    lo, hi = s["success_ci95"]
+    con.print(f"[bold]{name}[/] — {s['episodes']} episodes, seed {config['seed']}, "
+              f"T = {sc['control_period']} s, {sc['duration']} s, noise scale "
+              f"{sc['noise']['scale']}, x0 = {sc['x0']}")
+    con.print(f"success: {s['successes']}/{s['episodes']} = {s['success_rate']:.1%} "
+              f"(95 % Wilson CI {lo:.1%} – {hi:.1%})"
+              + (f"; failures: {s['failures']}" if s["failures"] else ""))
+    t = Table()
+    t.add_column("metric")
+    t.add_column("mean ± s.e.")
+    for key, label in (("cost", "J = ∫xᵀQx + uᵀRu dt (successes)"), ("rms_theta", "RMS θ [rad]"),
+                       ("max_abs_theta", "max |θ| [rad]"), ("rms_p", "RMS p [m]"),
+                       ("max_abs_p", "max |p| [m]"), ("rms_u", "RMS u [N]"),
+                       ("max_abs_u", "max |u| [N]"), ("saturated_fraction", "time saturated"),
+                       ("rms_est_err_p", "RMS p̂−p [m]"), ("rms_est_err_theta", "RMS θ̂−θ [rad]"),
+                       ("rms_est_err_p_dot", "RMS ṗ̂−ṗ [m/s]"),
+                       ("rms_est_err_theta_dot", "RMS θ̇̂−θ̇ [rad/s]"),
+                       ("settling_time", "settling time [s] (successes)"),
+                       ("time_to_failure", "time to failure [s] (failures)")):
+        m, se = s[key]["mean"], s[key]["se"]
+        cell = "–" if m != m else (f"{m:.4g}" if se != se else f"{m:.4g} ± {se:.2g}")
+        t.add_row(label, cell)
+    con.print(t)
+
+
+# ---- bench ---------------------------------------------------------------------------------------
+def cmd_bench(args: argparse.Namespace) -> int:
+    import os
+    import platform
+    import signal
+    import time
+    from pathlib import Path
+
+    from pendulum_lqg.experiments import load_spec, run_unit
+    from pendulum_lqg.results import ResultsDir
+
+    spec = load_spec(args.experiment).with_overrides(episodes=args.episodes, seed=args.seed)
+    out = ResultsDir(args.out or Path("results") / spec.name)
+    out.prepare(spec, force=args.force, resume=args.resume)
+    units = spec.units()
+    done = out.done()
+    todo = [u for u in units if u.key not in done]
+
+    def _terminate(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGTERM, _terminate)
+    started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+    t0 = time.perf_counter()
+    try:
+        _run_units(todo, len(units), len(units) - len(todo), out, run_unit, args)
+    except KeyboardInterrupt:
+        out.release()
+        finished = len(out.done())
+        print(f"interrupted: {finished}/{len(units)} work units are saved in {out.path}; "
+              f"complete them with: pendulum-lqg bench {args.experiment} --resume --out {out.path}"
+              + (f" --episodes {spec.episodes}" if args.episodes else "")
+              + (f" --seed {spec.seed}" if args.seed is not None else ""), file=sys.stderr)
+        return 130
+    finally:
+        signal.signal(signal.SIGTERM, old)
+    try:
+        meta = {"started": started, "elapsed_s": round(time.perf_counter() - t0, 3),
+                "units_run_now": len(todo), "python": platform.python_version(),
+                "machine": platform.machine(), "cpus": os.cpu_count()}
+        summary = out.finalize(spec, meta)
+        if args.record:
+            _record_bench(spec, out, summary, Path(args.record), args.nthread)
+    finally:
+        out.release()
+    sys.stdout.write((out.path / "summary.md").read_text())
+    print(f"\nresults: {out.path}/episodes.csv, summary.md, summary.json", file=sys.stderr)
+    del summary
+    return 0
+
+
+def _run_units(todo: list[Any], total: int, already: int, out: Any, run_unit: Any,
+               args: argparse.Namespace) -> None:
+    if args.quiet or not sys.stderr.isatty():
+        for i, unit in enumerate(todo, start=already + 1):
+            rows = run_unit(unit, nthread=args.nthread)
+            out.write_unit(unit, rows)
+            if not args.quiet:
+                print(f"[{i}/{total}] {unit.config.label} episodes {unit.start}-{unit.stop - 1}",
+                      file=sys.stderr)
+        return
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                  TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+                  transient=False) as prog:
+        task = prog.add_task("work units", total=total, completed=already)
+        for unit in todo:
+            prog.update(task, description=unit.config.label[:60])
+            rows = run_unit(unit, nthread=args.nthread)
+            out.write_unit(unit, rows)
+            prog.advance(task)
+
+
+def _record_bench(spec: Any, out: Any, summary: Any, record_dir: Any, nthread: Any) -> None:
+    from pendulum_lqg.plant import load_plant
+    from pendulum_lqg.policy import design_policy
+    from pendulum_lqg.record import record_episodes, telling_episodes
+    from pendulum_lqg.sim import run_episodes
+
+    record_dir.mkdir(parents=True, exist_ok=True)
+    rows = out.collect(spec)
+    nominal = load_plant()
+    for cfg in spec.configurations:
+        mine = [r for r in rows if r["config"] == cfg.index]
+        picks = telling_episodes(mine)
+        if not picks:
+            continue
+        scenario, dspec = cfg.build()
+        sim_plant = nominal if scenario.overrides.is_empty() else load_plant(
+            overrides=scenario.overrides)
+        policy = design_policy(nominal, scenario.control_period, scenario.noise, dspec)
+        episodes = sorted(set(picks.values()))
+        res = run_episodes(sim_plant, scenario, policy, seed=spec.seed, episodes=episodes,
+                           nthread=nthread, trajectory=True)
+        path = record_dir / f"{spec.name}_config{cfg.index:03d}.rrd"
+        config = {"experiment": spec.name, "configuration": cfg.values, "seed": spec.seed,
+                  "telling_episodes": picks, "scenario": scenario.to_dict(),
+                  "design": _dataclass_dict(dspec)}
+        record_episodes(res.trajectories, plant=sim_plant, scenario=scenario, policy=policy,
+                        config=config, path=path)
+        print(f"recorded {path} ({', '.join(f'{k}: {v}' for k, v in picks.items())})",
+              file=sys.stderr)
+
+
+# ---- perf ----------------------------------------------------------------------------------------
+def cmd_perf(args: argparse.Namespace) -> int:
+    from pendulum_lqg.perf import run_perf
+
+    result = run_perf(episodes=args.episodes, duration=args.duration, nthread=args.nthread,
+                      repeats=args.repeats, memory=args.memory,
+                      log=lambda msg: print(msg, file=sys.stderr))
+    if args.json:
+        print(json.dumps(_jsonable(result), indent=2))
+    else:
+        for line in result["report"]:
+            print(line)
+    return 0
+
+
+COMMANDS = {"design": cmd_design, "run": cmd_run, "bench": cmd_bench, "perf": cmd_perf}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    from pendulum_lqg.errors import PendulumLQGError
+
+    try:
+        return COMMANDS[args.command](args)
+    except PendulumLQGError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except BrokenPipeError:  # e.g. `pendulum-lqg design --json | head`
+        return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())

@@ -1,0 +1,278 @@
+"""Typed experiment specs (``experiments/*.toml``), sweeps split into work units, and results.
+
+An experiment file describes a grid::
+
+    name = "lecture"
+    description = "…"
+    episodes = 200          # per configuration
+    seed = 0
+    chunk = 250             # episodes per work unit (optional)
+
+    [scenario]              # fixed Scenario fields (see pendulum_lqg.sim.Scenario)
+    duration = 10.0
+
+    [noise]                 # fixed NoiseModel fields (see pendulum_lqg.noise.NoiseModel)
+    process = "state"
+
+    [design]                # fixed DesignSpec fields (see pendulum_lqg.policy.DesignSpec)
+    R = 1.0
+
+    [model]                 # fixed overrides of the simulated plant (ModelOverrides)
+
+    [grid]                  # every key a list; the sweep is their Cartesian product
+    policy = ["dlqr+luenberger", "dlqr+kalman"]
+    noise_scale = [0.0, 1.0]
+
+Grid keys: ``policy`` ("controller+observer"), ``controller``, ``observer``, ``noise_scale``,
+``control_period``, ``duration``, ``theta0``, ``estimate0``, ``discretization``,
+``pole_mass_scale``, ``pole_length_scale``, ``cart_mass_scale``. Unknown keys anywhere are an error
+that lists the known ones.
+
+The sweep is a list of :class:`WorkUnit` (configuration × episode chunk): plain, JSON-serialisable and
+independent, so they can run in any order or on other machines; :func:`run_unit` runs one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.noise import NoiseModel
+from pendulum_lqg.plant import ModelOverrides
+from pendulum_lqg.policy import CONTROLLERS, OBSERVERS, DesignSpec
+
+TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "scenario", "noise", "design",
+            "model", "grid")
+GRID_KEYS = ("policy", "controller", "observer", "noise_scale", "control_period", "duration",
+             "theta0", "estimate0", "discretization", "pole_mass_scale", "pole_length_scale",
+             "cart_mass_scale")
+SCENARIO_KEYS = ("control_period", "duration", "x0", "x0_std", "estimate0", "theta_max",
+                 "settle_band", "cost_Q", "cost_R")
+NOISE_KEYS = tuple(f.name for f in dataclasses.fields(NoiseModel))
+DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
+MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))
+
+
+def experiments_dir() -> Path:
+    return Path(__file__).resolve().parent.parent / "experiments"
+
+
+def _check_keys(where: str, table: dict[str, object], known: tuple[str, ...]) -> None:
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where}: expected a table, got {type(table).__name__}")
+    unknown = sorted(set(table) - set(known))
+    if unknown:
+        raise ConfigError(f"{where}: unknown key {unknown[0]!r}; known keys: " + ", ".join(known))
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One point of the grid: everything needed to run its episodes.
+
+    ``values`` are the grid values that define it (for tables); ``scenario``/``noise``/``design``/
+    ``model`` are the resolved tables, as plain data.
+    """
+
+    index: int
+    values: dict[str, object]
+    scenario: dict[str, object]
+    noise: dict[str, object]
+    design: dict[str, object]
+    model: dict[str, object]
+
+    @property
+    def label(self) -> str:
+        return ", ".join(f"{k}={v}" for k, v in self.values.items()) or "default"
+
+    def build(self) -> tuple[object, DesignSpec]:
+        """``(Scenario, DesignSpec)`` of this configuration (validated)."""
+        from pendulum_lqg.sim import Scenario
+
+        noise = NoiseModel(**self.noise)  # type: ignore[arg-type]
+        overrides = ModelOverrides.from_mapping(self.model)
+        scenario = Scenario(noise=noise, overrides=overrides, **self.scenario)  # type: ignore[arg-type]
+        return scenario, DesignSpec(**self.design)  # type: ignore[arg-type]
+
+    def to_dict(self) -> dict[str, object]:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class ExperimentSpec:
+    """A parsed, validated experiment file."""
+
+    name: str
+    description: str
+    episodes: int
+    seed: int
+    chunk: int
+    configurations: tuple[Configuration, ...]
+    source: dict[str, object] = field(default_factory=dict)
+
+    def with_overrides(self, *, episodes: int | None = None, seed: int | None = None,
+                       ) -> ExperimentSpec:
+        src = dict(self.source)
+        if episodes is not None:
+            src["episodes"] = episodes
+        if seed is not None:
+            src["seed"] = seed
+        return parse_spec(src, name=self.name)
+
+    def units(self) -> list[WorkUnit]:
+        out = []
+        for cfg in self.configurations:
+            for start in range(0, self.episodes, self.chunk):
+                out.append(WorkUnit(config=cfg, seed=self.seed, start=start,
+                                    stop=min(self.episodes, start + self.chunk)))
+        return out
+
+    def fingerprint(self) -> str:
+        """Hash of the resolved spec: a resumed sweep must have the same one."""
+        blob = json.dumps(self.source, sort_keys=True, default=str).encode()
+        return hashlib.sha256(blob).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class WorkUnit:
+    """An independent piece of a sweep: episodes ``[start, stop)`` of one configuration."""
+
+    config: Configuration
+    seed: int
+    start: int
+    stop: int
+
+    @property
+    def key(self) -> str:
+        return f"c{self.config.index:03d}_e{self.start:06d}-{self.stop:06d}"
+
+    def to_json(self) -> str:
+        return json.dumps(dataclasses.asdict(self), sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text: str) -> WorkUnit:
+        d = json.loads(text)
+        return cls(config=Configuration(**d["config"]), seed=d["seed"], start=d["start"],
+                   stop=d["stop"])
+
+
+def _as_int(where: str, value: object, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+        raise ConfigError(f"{where}: expected an integer ≥ {minimum}, got {value!r}")
+    return value
+
+
+def _grid_point(values: dict[str, object], base: dict[str, dict[str, object]],
+                ) -> dict[str, dict[str, object]]:
+    tables = {k: dict(v) for k, v in base.items()}
+    for key, value in values.items():
+        if key == "policy":
+            if not isinstance(value, str) or value.count("+") != 1:
+                raise ConfigError(f"grid.policy: expected 'controller+observer' (e.g. "
+                                  f"'dlqr+kalman'), got {value!r}")
+            ctrl, obs = value.split("+")
+            tables["design"]["controller"], tables["design"]["observer"] = ctrl, obs
+        elif key in ("controller", "observer", "discretization"):
+            tables["design"][key] = value
+        elif key == "noise_scale":
+            tables["noise"]["scale"] = value
+        elif key in ("control_period", "duration", "estimate0"):
+            tables["scenario"][key] = value
+        elif key == "theta0":
+            x0 = list(tables["scenario"].get("x0", (0.0, 0.1, 0.0, 0.0)))  # type: ignore[arg-type]
+            x0[1] = value
+            tables["scenario"]["x0"] = x0
+        else:  # model scales
+            tables["model"][key] = value
+    return tables
+
+
+def parse_spec(data: dict[str, object], *, name: str = "experiment") -> ExperimentSpec:
+    """Validate an experiment mapping (as read from TOML)."""
+    _check_keys("experiment", data, TOP_KEYS)
+    base = {
+        "scenario": dict(data.get("scenario", {})),  # type: ignore[arg-type]
+        "noise": dict(data.get("noise", {})),  # type: ignore[arg-type]
+        "design": dict(data.get("design", {})),  # type: ignore[arg-type]
+        "model": dict(data.get("model", {})),  # type: ignore[arg-type]
+    }
+    _check_keys("scenario", base["scenario"], SCENARIO_KEYS)
+    _check_keys("noise", base["noise"], NOISE_KEYS)
+    _check_keys("design", base["design"], DESIGN_KEYS)
+    _check_keys("model", base["model"], MODEL_KEYS)
+    grid = data.get("grid", {})
+    _check_keys("grid", grid, GRID_KEYS)  # type: ignore[arg-type]
+    for key, values in grid.items():  # type: ignore[union-attr]
+        if not isinstance(values, list) or not values:
+            raise ConfigError(f"grid.{key}: expected a non-empty list, got {values!r}")
+    for key, values in grid.items():  # type: ignore[union-attr]
+        if key == "controller":
+            bad = [v for v in values if v not in CONTROLLERS]
+        elif key == "observer":
+            bad = [v for v in values if v not in OBSERVERS]
+        else:
+            bad = []
+        if bad:
+            known = CONTROLLERS if key == "controller" else OBSERVERS
+            raise ConfigError(f"grid.{key}: unknown {bad[0]!r}; expected one of " + ", ".join(known))
+    episodes = _as_int("episodes", data.get("episodes", 100), 1)
+    seed = _as_int("seed", data.get("seed", 0), 0)
+    chunk = _as_int("chunk", data.get("chunk", 250), 1)
+    keys = list(grid)  # type: ignore[arg-type]
+    configs = []
+    combos = itertools.product(*[grid[k] for k in keys]) if keys else [()]  # type: ignore[index]
+    for i, combo in enumerate(combos):
+        values = dict(zip(keys, combo, strict=True))
+        tables = _grid_point(values, base)
+        cfg = Configuration(index=i, values=values, **tables)
+        cfg.build()  # validate every configuration now, not in the middle of a sweep
+        configs.append(cfg)
+    return ExperimentSpec(name=str(data.get("name", name)), description=str(
+        data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,
+        configurations=tuple(configs), source=dict(data))
+
+
+def load_spec(name_or_path: str) -> ExperimentSpec:
+    """Load ``experiments/NAME.toml`` or a path to a TOML file."""
+    path = Path(name_or_path)
+    if not path.suffix:
+        candidate = experiments_dir() / f"{name_or_path}.toml"
+        if candidate.is_file():
+            path = candidate
+    if not path.is_file():
+        known = sorted(p.stem for p in experiments_dir().glob("*.toml"))
+        raise ConfigError(f"experiment: no file {name_or_path!r}; known experiments: "
+                          + ", ".join(known))
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"experiment: {path} is not valid TOML: {exc}") from exc
+    return parse_spec(data, name=path.stem)
+
+
+def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, object]]:
+    """Run one work unit; rows carry the configuration's grid values and index."""
+    from pendulum_lqg.plant import load_plant
+    from pendulum_lqg.policy import design_policy
+    from pendulum_lqg.sim import run_episodes
+
+    scenario, spec = unit.config.build()
+    nominal = load_plant()
+    simulated = load_plant(overrides=scenario.overrides) if not scenario.overrides.is_empty() \
+        else nominal
+    policy = design_policy(nominal, scenario.control_period, scenario.noise, spec)
+    res = run_episodes(simulated, scenario, policy, seed=unit.seed,
+                       episodes=range(unit.start, unit.stop), nthread=nthread)
+    out = []
+    for row in res.rows:
+        out.append({"config": unit.config.index, **_flat(unit.config.values), **row})
+    return out
+
+
+def _flat(values: dict[str, object]) -> dict[str, object]:
+    return {k: (json.dumps(v) if isinstance(v, list | dict) else v) for k, v in values.items()}
