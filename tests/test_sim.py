@@ -1,0 +1,194 @@
+"""The noisy closed loop on the MuJoCo model: stabilisation, optimal cost, equivalent code paths."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.metrics import summarize, wilson_interval
+from pendulum_lqg.noise import NoiseModel, NoiseStream
+from pendulum_lqg.policy import OBSERVERS, DesignSpec, design_policy
+from pendulum_lqg.sim import Scenario, Simulator, episode_seed, run_episodes
+
+LECTURE = Scenario()
+
+
+def _run(plant, scenario, controller, observer, episodes, seed=0, **kw):
+    policy = design_policy(plant, scenario.control_period, scenario.noise,
+                           DesignSpec(controller=controller, observer=observer))
+    return run_episodes(plant, scenario, policy, seed=seed, episodes=range(episodes), **kw)
+
+
+# ---- stabilisation -------------------------------------------------------------------------------
+@pytest.mark.parametrize(("controller", "observer"), [
+    ("lqr", "none"), ("dlqr", "none"), ("dlqr", "kalman"), ("dlqr", "kalman-predictor"),
+    ("dlqr", "kalman-tv"), ("lqr", "kalman-bucy"), ("lqr", "kalman")])
+def test_lqg_stabilises_the_lecture_scenario(plant, controller, observer):
+    rows = _run(plant, LECTURE, controller, observer, 200).rows
+    s = summarize(rows)
+    assert s["success_rate"] >= 0.99, s["failures"]
+    assert s["max_abs_theta"]["mean"] < 0.3
+
+
+@pytest.mark.parametrize("controller", ["lqr", "dlqr"])
+@pytest.mark.parametrize("observer", OBSERVERS)
+def test_every_policy_stabilises_the_noise_free_case(plant, controller, observer):
+    sc = LECTURE.replace(noise=NoiseModel.lecture(scale=0.0), duration=15.0)
+    row = _run(plant, sc, controller, observer, 1).rows[0]
+    assert row["success"], row
+    assert row["settling_time"] < 15.0
+
+
+def test_luenberger_default_poles_fail_under_the_lecture_noise(plant):
+    """The deliberately slow default observer cannot hold the pole under the lecture noise."""
+    s = summarize(_run(plant, LECTURE, "dlqr", "luenberger", 100).rows)
+    assert s["success_rate"] < 0.2
+    kal = summarize(_run(plant, LECTURE, "dlqr", "kalman", 100).rows)
+    assert kal["rms_est_err_theta"]["mean"] < 0.5 * s["rms_est_err_theta"]["mean"]
+
+
+def test_simulated_cost_matches_the_riccati_cost(plant):
+    """dm_control's lqr_test idea: J = ∫xᵀQx + uᵀRu dt from x₀ equals x₀ᵀPx₀ (our J has no ½).
+
+    The DLQR uses the exact sampled-data weights of this J, so P is the optimal continuous cost of
+    the sampled linear loop; the MuJoCo run adds only nonlinearity and the integrator's O(h)."""
+    x0 = (0.05, 0.02, 0.0, 0.0)
+    sc = LECTURE.replace(noise=NoiseModel.lecture(scale=0.0), duration=30.0, x0=x0,
+                         estimate0="true")
+    policy = design_policy(plant, sc.control_period, sc.noise, DesignSpec("dlqr", "none"))
+    row = run_episodes(plant, sc, policy, seed=0, episodes=[0]).rows[0]
+    x0 = np.array(x0)
+    expected = x0 @ policy.info["P_lqr"] @ x0
+    assert row["cost"] == pytest.approx(expected, rel=0.02)
+    assert row["cost"] == pytest.approx(expected, rel=2e-3)   # in fact much closer
+
+
+# ---- equivalent code paths -----------------------------------------------------------------------
+def _dump(rows):
+    return json.dumps(rows, sort_keys=True)
+
+
+@pytest.mark.parametrize("observer", ["kalman", "luenberger", "kalman-tv", "kalman-bucy"])
+def test_batched_equals_single_episode_path(plant, observer):
+    """Bit-identical: rollout batch vs plain mj_step loop, any batch composition, any threads."""
+    sc = LECTURE.replace(duration=4.0)
+    policy = lambda: design_policy(plant, sc.control_period, sc.noise, DesignSpec("dlqr", observer))  # noqa: E731
+    batch = run_episodes(plant, sc, policy(), seed=7, episodes=range(8), nthread=2).rows
+    single = [run_episodes(plant, sc, policy(), seed=7, episodes=[e], backend="step").rows[0]
+              for e in range(8)]
+    subset = run_episodes(plant, sc, policy(), seed=7, episodes=[5, 1], nthread=1).rows
+    assert _dump(batch) == _dump(single)
+    assert _dump([batch[5], batch[1]]) == _dump(subset)
+
+
+def test_force_noise_paths_agree_and_kalman_stabilises(plant):
+    noise = NoiseModel(process="force", process_density=(1e-3, 1e-4), measurement_variance=1e-4)
+    sc = LECTURE.replace(noise=noise, duration=4.0)
+    pol = lambda: design_policy(plant, sc.control_period, noise, DesignSpec("dlqr", "kalman"))  # noqa: E731
+    batch = run_episodes(plant, sc, pol(), seed=1, episodes=range(3)).rows
+    single = [run_episodes(plant, sc, pol(), seed=1, episodes=[e], backend="step").rows[0]
+              for e in range(3)]
+    assert _dump(batch) == _dump(single)
+    s = summarize(run_episodes(plant, sc.replace(duration=10.0), pol(), seed=2,
+                               episodes=range(100)).rows)
+    assert s["success_rate"] >= 0.99
+
+
+def test_same_seed_same_results_and_seeds_differ(plant):
+    a = _run(plant, LECTURE.replace(duration=2.0), "dlqr", "kalman", 4, seed=3).rows
+    b = _run(plant, LECTURE.replace(duration=2.0), "dlqr", "kalman", 4, seed=3).rows
+    c = _run(plant, LECTURE.replace(duration=2.0), "dlqr", "kalman", 4, seed=4).rows
+    assert _dump(a) == _dump(b)
+    assert a[0]["cost"] != c[0]["cost"]
+    assert [r["seed"] for r in a] == [episode_seed(3, e) for e in range(4)]
+    assert len({r["seed"] for r in a}) == 4
+
+
+# ---- noise units ---------------------------------------------------------------------------------
+def test_lecture_noise_conversion():
+    """x ← x + T·w, w ~ N(0, 0.04 I) at T = 0.01 s  ⇔  density W = 0.04·T·I, jump covariance W·T."""
+    noise = NoiseModel.lecture()
+    np.testing.assert_allclose(noise.W, 0.04 * 0.01 * np.eye(4))
+    np.testing.assert_allclose(noise.V, 0.01 * np.eye(2))
+    stream = NoiseStream(noise, steps_per_period=10, dt=0.01, h=0.001)
+    np.testing.assert_allclose(stream.proc_std, 0.01 * np.sqrt(0.04))     # T·σ_w
+    np.testing.assert_allclose(stream.meas_std, 0.1)
+    stream.reset([np.random.default_rng(0)])
+    jumps = np.array([stream.state_jump(stream.draw(np.arange(1))[0])[0] for _ in range(20000)])
+    # off-diagonal sampling s.e. is 4e-6/√20000 ≈ 3e-8: allow 5 s.e.
+    np.testing.assert_allclose(np.cov(jumps.T), noise.W * 0.01, rtol=0.05, atol=1.5e-7)
+    half = NoiseStream(noise.with_scale(0.5), steps_per_period=10, dt=0.01, h=0.001)
+    np.testing.assert_allclose(half.meas_std, 0.05)
+
+
+def test_noise_is_drawn_in_blocks_independent_of_batch_and_length():
+    """An episode's noise is the same alone or in a batch, and its stream does not depend on N."""
+    noise = NoiseModel.lecture()
+    a = NoiseStream(noise, steps_per_period=10, dt=0.01, h=0.001)
+    b = NoiseStream(noise, steps_per_period=10, dt=0.01, h=0.001)
+    a.reset([np.random.default_rng(s) for s in (11, 12, 13)])
+    b.reset([np.random.default_rng(12)])
+    for _ in range(600):                                     # crosses block boundaries
+        za = a.draw(np.arange(3))
+        zb = b.draw(np.arange(1))
+        np.testing.assert_array_equal(za[0][1], zb[0][0])
+        np.testing.assert_array_equal(za[1][1], zb[1][0])
+
+
+# ---- failures and divergence ---------------------------------------------------------------------
+def test_a_diverging_row_fails_alone(plant):
+    sc = LECTURE.replace(duration=1.0)
+    gens = lambda: [np.random.default_rng(s) for s in (1, 2, 3)]  # noqa: E731
+    with Simulator(plant, sc) as sim:
+        sim.reset(gens())
+        sim.measure()
+        res = sim.step(np.array([0.0, np.nan, 0.0]))
+        assert res.failed.tolist() == [False, True, False]
+        ok_states = res.states[[0, 2]].copy()
+    with Simulator(plant, sc, backend="step") as sim:
+        sim.reset(gens())
+        sim.measure()
+        res2 = sim.step(np.array([0.0, 0.0, 0.0]))
+    np.testing.assert_array_equal(ok_states, res2.states[[0, 2]])
+    rows = sim.metrics.rows(np.arange(3))
+    assert [r["failure_reason"] for r in rows] == ["", "", ""]
+
+
+def test_absurd_noise_is_counted_as_divergence_and_the_batch_completes(plant):
+    sc = LECTURE.replace(noise=NoiseModel.lecture(scale=1e9), duration=1.0)
+    rows = _run(plant, sc, "dlqr", "kalman", 5).rows
+    assert all(not r["success"] for r in rows)
+    assert {r["failure_reason"] for r in rows} == {"diverged"}
+    assert all(np.isfinite(r["cost"]) for r in rows)
+
+
+def test_pole_and_track_failures_are_named(plant):
+    sc = LECTURE.replace(noise=NoiseModel.lecture(scale=0.0), x0=(0.0, 0.6, 0.0, 0.0))
+    row = _run(plant, sc, "dlqr", "none", 1).rows[0]
+    assert row["failure_reason"] == "pole_fell" and row["time_to_failure"] == pytest.approx(0.001)
+    sc = LECTURE.replace(noise=NoiseModel.lecture(scale=0.0), x0=(2.39, 0.0, 3.0, 0.0))
+    row = _run(plant, sc, "dlqr", "none", 1).rows[0]
+    assert row["failure_reason"] == "track_limit" and 0 < row["time_to_failure"] < 0.05
+
+
+def test_scenario_validation():
+    with pytest.raises(ConfigError, match="duration: expected a finite positive number"):
+        Scenario(duration=-1.0)
+    with pytest.raises(ConfigError, match="x0: expected 4 finite numbers"):
+        Scenario(x0=(0.0, 0.1))
+    with pytest.raises(ConfigError, match="noise_scale: expected a finite number ≥ 0"):
+        NoiseModel(scale=-1.0)
+    with pytest.raises(ConfigError, match="measurement_variance: expected finite non-negative"):
+        NoiseModel(measurement_variance=(-0.01, 0.01))
+    with pytest.raises(ConfigError, match="observer: unknown 'kalmann'; expected one of none"):
+        DesignSpec(observer="kalmann")
+
+
+def test_wilson_interval_reference_values():
+    lo, hi = wilson_interval(95, 100)
+    assert lo == pytest.approx(0.8882, abs=1e-4) and hi == pytest.approx(0.9785, abs=1e-4)
+    lo, hi = wilson_interval(0, 10)
+    assert lo == 0.0 and hi == pytest.approx(0.2775, abs=1e-4)
