@@ -374,17 +374,18 @@ def _dataclass_dict(obj: Any) -> dict[str, Any]:
 
 def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None:
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
-    con = Console()
+    con = Console(highlight=False)
     sc = config["scenario"]
     lo, hi = s["success_ci95"]
-    con.print(f"[bold]{name}[/] — {s['episodes']} episodes, seed {config['seed']}, "
-              f"T = {sc['control_period']} s, {sc['duration']} s, noise scale "
-              f"{sc['noise']['scale']}, x0 = {sc['x0']}")
+    con.print(escape(f"{name} — {s['episodes']} episodes, seed {config['seed']}, "
+                     f"T = {sc['control_period']} s, {sc['duration']} s, noise scale "
+                     f"{sc['noise']['scale']}, x0 = {list(sc['x0'])}"))
     con.print(f"success: {s['successes']}/{s['episodes']} = {s['success_rate']:.1%} "
               f"(95 % Wilson CI {lo:.1%} – {hi:.1%})"
-              + (f"; failures: {s['failures']}" if s["failures"] else ""))
+              + escape(f"; failures: {s['failures']}" if s["failures"] else ""))
     t = Table()
     t.add_column("metric")
     t.add_column("mean ± s.e.")
@@ -399,7 +400,7 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None
                        ("time_to_failure", "time to failure [s] (failures)")):
         m, se = s[key]["mean"], s[key]["se"]
         cell = "–" if m != m else (f"{m:.4g}" if se != se else f"{m:.4g} ± {se:.2g}")
-        t.add_row(label, cell)
+        t.add_row(escape(label), cell)
     con.print(t)
 
 

@@ -183,7 +183,7 @@ def _fmt(stat: dict[str, float], digits: int = 3) -> str:
     mean, se = stat["mean"], stat["se"]
     if mean != mean:  # nan
         return "–"
-    if se != se:
+    if se != se or se <= 1e-9 * max(abs(mean), 1e-12):   # single value, or identical episodes
         return f"{mean:.{digits}g}"
     return f"{mean:.{digits}g} ± {se:.2g}"
 
@@ -192,7 +192,7 @@ def markdown_table(spec: ExperimentSpec, summary: dict[str, object]) -> str:
     """The summary as a Markdown table (one row per configuration)."""
     configs = summary["configurations"]  # type: ignore[index]
     keys = list(spec.configurations[0].values) if spec.configurations else []
-    head = [*keys, "success [95 % CI]", "J (successes)", "RMS θ [rad]", "max |θ| [rad]",
+    head = [*keys, "success [95 % CI]", "J (successes)", "RMS θ [rad]", "max abs θ [rad]",
             "RMS p [m]", "RMS u [N]", "saturated", "RMS θ̂−θ [rad]", "RMS ṗ̂−ṗ [m/s]",
             "failures"]
     lines = [f"**{spec.name}** — {spec.episodes} episodes per configuration, seed {spec.seed}",
