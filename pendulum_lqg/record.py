@@ -50,6 +50,7 @@ import json
 import subprocess
 import sys
 import time
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -69,6 +70,8 @@ if TYPE_CHECKING:
 TIMELINE = "sim_time"
 #: Episodes that get their own tab in the blueprint (all are recorded regardless).
 MAX_EPISODE_TABS = 12
+#: Seconds to wait for a spawned viewer to take the data before giving up on it.
+SPAWN_FLUSH_TIMEOUT = 10.0
 
 _SYMBOLS = {"p": "p", "theta": "θ", "p_dot": "ṗ", "theta_dot": "θ̇"}
 _UNITS = {"p": "m", "theta": "rad", "p_dot": "m/s", "theta_dot": "rad/s"}
@@ -94,6 +97,7 @@ class RecordingStats:
     seconds_logging : wall time of the ``log`` / ``send_columns`` calls alone
     path : the ``.rrd`` file written (``None`` if only a viewer was spawned)
     bytes : size of that file (0 without a file)
+    viewer_reached : with ``spawn``, whether the spawned viewer took all data (``None`` without)
     """
 
     episodes: int
@@ -103,6 +107,7 @@ class RecordingStats:
     seconds_logging: float
     path: Path | None
     bytes: int
+    viewer_reached: bool | None = None
 
 
 @dataclass(frozen=True)
@@ -207,7 +212,7 @@ def _body_geoms(plant: Plant, body: str | int) -> list[_Geom]:
 
 
 def _rgba8(rgba: np.ndarray, alpha: int | None = None) -> list[int]:
-    c = [int(round(255 * float(v))) for v in np.clip(rgba, 0.0, 1.0)]
+    c = [round(255 * float(v)) for v in np.clip(rgba, 0.0, 1.0)]
     if alpha is not None:
         c[3] = alpha
     return c
@@ -287,11 +292,12 @@ def _fmt(value: object) -> str:
     if isinstance(value, np.ndarray):
         if np.iscomplexobj(value):
             return "[" + ", ".join(_fmt(complex(v)) for v in value.ravel()) + "]"
-        return np.array2string(value, precision=5, suppress_small=False, max_line_width=100)
+        return np.array2string(value, separator=", ", max_line_width=100,
+                               formatter={"float_kind": lambda v: f"{v:.6g}"})
     if isinstance(value, complex):
         if abs(value.imag) < 1e-12:
-            return f"{value.real:.5g}"
-        return f"{value.real:.5g}{value.imag:+.5g}j"
+            return f"{value.real:.6g}"
+        return f"{value.real:.6g}{value.imag:+.6g}j"
     if isinstance(value, float):
         return f"{value:.6g}"
     return str(value)
@@ -313,6 +319,20 @@ def _jsonable(value: object) -> object:
     return value
 
 
+def _flatten(data: object, prefix: str = "") -> dict[str, object]:
+    """Nested mappings as ``{"a.b": value}`` (lists stay values)."""
+    if not isinstance(data, Mapping):
+        return {prefix: data}
+    out: dict[str, object] = {}
+    for k, v in data.items():
+        key = f"{prefix}.{k}" if prefix else str(k)
+        if isinstance(v, Mapping) and v:
+            out.update(_flatten(v, key))
+        else:
+            out[key] = v
+    return out
+
+
 def _config_markdown(plant: Plant, scenario: Scenario, policy: Policy,
                      config: Mapping[str, object]) -> str:
     info = policy.info
@@ -329,11 +349,12 @@ def _config_markdown(plant: Plant, scenario: Scenario, policy: Policy,
                        ("observer_poles_continuous", "observer poles (s)")):
         if key in info:
             lines += [f"**{label}**", "", "```", _fmt(np.asarray(info[key])), "```", ""]
-    lines += ["## Configuration", "", "```json",
-              json.dumps(_jsonable(dict(config)), indent=2, default=str), "```", "",
-              "## Scenario", "", "```json",
-              json.dumps(_jsonable(scenario.to_dict()), indent=2, default=str), "```", "",
-              "## Plant (read from the MJCF)", "", f"model: `{plant.path}`", "",
+    for title, data in (("Configuration", config), ("Scenario", scenario.to_dict())):
+        lines += [f"## {title}", "", "| key | value |", "|---|---|"]
+        lines += [f"| {k} | `{json.dumps(v, default=str)}` |"
+                  for k, v in _flatten(_jsonable(dict(data))).items()]
+        lines.append("")
+    lines += ["## Plant (read from the MJCF)", "", f"model: `{plant.path}`", "",
               "| parameter | value |", "|---|---|"]
     lines += [f"| {k} | {_fmt(v)} |" for k, v in plant.parameters().items()]
     return "\n".join(lines) + "\n"
@@ -679,12 +700,25 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
                                          media_type=rr.MediaType.MARKDOWN))
     for pre, tr, label in prefixes:
         _record_episode(w, plant, tr, pre, estimated=estimated, label=label, u_max=plant.u_max)
-    rec.flush()
+    viewer_reached: bool | None = None
+    if spawn:
+        # A spawned viewer that never came up (e.g. no display) would block an unbounded flush.
+        try:
+            rec.flush(timeout_sec=SPAWN_FLUSH_TIMEOUT)
+            viewer_reached = True
+        except RuntimeError as exc:
+            viewer_reached = False
+            warnings.warn(f"record: the spawned Rerun viewer did not take the recording ({exc})"
+                          + (f"; the file {out_path} is still written" if out_path else ""),
+                          RuntimeWarning, stacklevel=2)
+    else:
+        rec.flush()
     rec.disconnect()
     seconds = time.perf_counter() - t_start
     size = out_path.stat().st_size if out_path is not None and out_path.exists() else 0
     return RecordingStats(episodes=len(trajectories), entities=len(w.entities), rows=w.rows,
-                          seconds=seconds, seconds_logging=w.seconds, path=out_path, bytes=size)
+                          seconds=seconds, seconds_logging=w.seconds, path=out_path, bytes=size,
+                          viewer_reached=viewer_reached)
 
 
 # ---- reading back and verifying -------------------------------------------------------------
