@@ -252,6 +252,8 @@ def cmd_design(args: argparse.Namespace) -> int:
                        "continuous_closed_loop_poles": d["lqg"].poles,
                        "discrete_closed_loop_poles": d["dlqg"].poles},
     }
+    for key in [k for k in data if k.endswith("_poles")]:
+        data[key] = np.asarray(data[key], dtype=complex)      # always [re, im] pairs in JSON
     if args.json:
         print(json.dumps(_jsonable(data), indent=2))
         return 0

@@ -102,6 +102,14 @@ class Configuration:
     def to_dict(self) -> dict[str, object]:
         return dataclasses.asdict(self)
 
+    def validate(self) -> None:
+        """Build the configuration and check it against the (possibly overridden) model."""
+        from pendulum_lqg.linearize import steps_per_period
+        from pendulum_lqg.plant import load_plant
+
+        scenario, _ = self.build()
+        steps_per_period(load_plant(overrides=scenario.overrides), scenario.control_period)
+
 
 @dataclass(frozen=True)
 class ExperimentSpec:
@@ -230,7 +238,7 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment") -> Experime
         values = dict(zip(keys, combo, strict=True))
         tables = _grid_point(values, base)
         cfg = Configuration(index=i, values=values, **tables)
-        cfg.build()  # validate every configuration now, not in the middle of a sweep
+        cfg.validate()  # every configuration now, not in the middle of a sweep
         configs.append(cfg)
     return ExperimentSpec(name=str(data.get("name", name)), description=str(
         data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,

@@ -25,6 +25,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from pendulum_lqg import design
+from pendulum_lqg.design._checks import as_poles
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.estimators import (
     CurrentEstimator,
@@ -88,8 +89,8 @@ class DesignSpec:
         if not np.isfinite(r) or r <= 0:
             raise ConfigError(f"R: expected a finite positive number, got {self.R!r}")
         object.__setattr__(self, "R", r)
-        poles = tuple(complex(p) if isinstance(p, complex) else float(p)
-                      for p in self.observer_poles)
+        checked = as_poles("observer_poles", self.observer_poles, 4)
+        poles = tuple(complex(p) if abs(p.imag) > 0 else float(p.real) for p in checked)
         object.__setattr__(self, "observer_poles", poles)
 
     @property
