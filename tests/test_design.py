@@ -102,7 +102,7 @@ def test_cross_weight_matches_python_control():
 def test_dkalman_filter_and_predictor_gains():
     import control
 
-    Phi, Gamma = design.zoh(A_DI, B_DI, 0.1)
+    Phi, _ = design.zoh(A_DI, B_DI, 0.1)
     W, V = np.diag([1e-3, 1e-2]), np.array([[0.05]])
     kf = design.dkalman(Phi, np.eye(2), C_DI, W, V)
     L_dlqe, M_dlqe, _ = control.dlqe(Phi, np.eye(2), C_DI, W, V)

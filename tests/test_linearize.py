@@ -50,12 +50,12 @@ def test_finite_differences_match_analytic_rigid_body(overrides):
 def test_classic_cartpole_numbers(plant):
     """Closed form for a uniform rod: θ̈ = (m_c+m_p) g l θ / det M₀ etc."""
     lin = linearize(plant)
-    mc, mp, l, Ip, g = 1.0, 0.1, 0.5, 0.1 * (3 * 0.015**2 + 1.0) / 12, 9.81
-    det = (mc + mp) * (Ip + mp * l**2) - (mp * l) ** 2
-    assert lin.A[3, 1] == pytest.approx((mc + mp) * mp * g * l / det, rel=1e-8)
-    assert lin.A[2, 1] == pytest.approx(-(mp * l) ** 2 * g / det, rel=1e-8)
-    assert lin.B[2, 0] == pytest.approx((Ip + mp * l**2) / det, rel=1e-8)
-    assert lin.B[3, 0] == pytest.approx(-mp * l / det, rel=1e-8)
+    mc, mp, lc, Ip, g = 1.0, 0.1, 0.5, 0.1 * (3 * 0.015**2 + 1.0) / 12, 9.81
+    det = (mc + mp) * (Ip + mp * lc**2) - (mp * lc) ** 2
+    assert lin.A[3, 1] == pytest.approx((mc + mp) * mp * g * lc / det, rel=1e-8)
+    assert lin.A[2, 1] == pytest.approx(-(mp * lc) ** 2 * g / det, rel=1e-8)
+    assert lin.B[2, 0] == pytest.approx((Ip + mp * lc**2) / det, rel=1e-8)
+    assert lin.B[3, 0] == pytest.approx(-mp * lc / det, rel=1e-8)
     s = np.sort(np.linalg.eigvals(lin.A).real)
     np.testing.assert_allclose(s, [-np.sqrt(lin.A[3, 1]), 0, 0, np.sqrt(lin.A[3, 1])], atol=1e-6)
 
