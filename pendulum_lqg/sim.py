@@ -247,12 +247,13 @@ class Simulator:
         self._capacity = n
         self._models = [self.model] * n
         self._state_out = np.empty((n, self.k, self._nstate))
-        self._sens_out = np.empty((n, self.k, self.model.nsensordata))
         self._ctrl_buf = np.zeros((n, self.k, self._ncontrol))
+        self._init_buf = np.zeros((n, self._nstate))     # only the x columns are ever written
 
     # ---- episodes ----------------------------------------------------------------------------
     def reset(self, generators: list[np.random.Generator], *, ids: np.ndarray | None = None,
-              rows: np.ndarray | None = None) -> np.ndarray:
+              rows: np.ndarray | None = None, initial_states: np.ndarray | None = None,
+              ) -> np.ndarray:
         """Start episodes; returns the initial true states (n, 4).
 
         Each generator first draws the initial state (4 normals), then the noise blocks.
@@ -263,10 +264,19 @@ class Simulator:
         ids : episode numbers for the metrics (default ``0..n-1``)
         rows : reset only these rows of the running batch (vector envs' autoreset); ``ids``
             must then be given for them too
+        initial_states : (n, 4) explicit initial states instead of the scenario's distribution
+            (grids such as region-of-attraction maps); the 4 normals are drawn all the same so
+            the noise that follows is unchanged
         """
         sc = self.scenario
         z = np.array([g.standard_normal(4) for g in generators]).reshape(-1, 4)
         x0 = np.asarray(sc.x0) + np.asarray(sc.x0_std) * z
+        if initial_states is not None:
+            given = np.asarray(initial_states, dtype=float)
+            if given.shape != x0.shape or not np.all(np.isfinite(given)):
+                raise ConfigError(f"initial_states: expected finite values of shape {x0.shape}, "
+                                  f"got shape {given.shape}")
+            x0 = given.copy()
         if rows is None:
             n = len(generators)
             self._ensure_capacity(n)
@@ -359,8 +369,8 @@ class Simulator:
 
     # ---- physics -----------------------------------------------------------------------------
     def _initial_physics_state(self) -> np.ndarray:
-        init = np.zeros((self.n, self._nstate))
-        init[:, self._cols] = self.x
+        init = self._init_buf[: self.n]
+        init[:, self._state_slice] = self.x
         return init
 
     def _advance_rollout(self, u: np.ndarray, forces: np.ndarray | None,
@@ -372,10 +382,10 @@ class Simulator:
         ctrl[:, :, 0] = u[:, None]
         if forces is not None:
             ctrl[:, :, 1:][:, :, self.plant.qvel_index] = forces
-        state_out, sens_out = self._state_out[:n], self._sens_out[:n]
-        self._rollout.rollout(self._models[:n], self._datas, init, ctrl,
-                              control_spec=self._control_spec, skip_checks=True, nstep=self.k,
-                              state=state_out, sensordata=sens_out)
+        state_out = self._state_out[:n]
+        self._rollout.rollout(self._models if n == self._capacity else self._models[:n],
+                              self._datas, init, ctrl, control_spec=self._control_spec,
+                              skip_checks=True, nstep=self.k, state=state_out)
         # MuJoCo resets the data (time back to 0) when the integration goes unstable, so the
         # last step's time falls short of k·h.
         reset_flag = state_out[:, -1, self._time_col] < (self.k - 0.5) * self.h
@@ -405,16 +415,18 @@ class Simulator:
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """First failing physics step of each row (or ``k`` if none) and the reason code."""
         sc = self.scenario
-        with np.errstate(invalid="ignore"):
-            # fast path, the common case: every value finite and inside every limit (the checks
-            # below then find no failure; a nan fails ``<=`` and takes the full path)
-            mag = np.abs(states)
-            if (self.n and not reset_flag.any() and mag.max() <= RUNAWAY
-                    and np.abs(x_end).max() <= RUNAWAY
-                    and mag[:, :, 1].max() <= sc.theta_max and mag[:, :, 0].max() < self.track):
-                n = self.n
+        n = self.n
+        if n:
+            # fast path, the common case: every value finite and inside every limit, so the full
+            # checks below would find no failure (numpy's max keeps a nan, and a nan fails every
+            # comparison here, so it takes the full path)
+            p, th, v, w = np.abs(states).max(axis=(0, 1)).tolist()
+            if (th <= sc.theta_max and p < self.track and v <= RUNAWAY and w <= RUNAWAY
+                    and float(np.abs(x_end).max()) <= RUNAWAY and not reset_flag.any()):
                 return (np.zeros(n, dtype=bool), np.full(n, FAIL_NONE, dtype=np.int8),
                         np.full(n, self.k))
+        with np.errstate(invalid="ignore"):
+            mag = np.abs(states)
             # ``not (|x| <= RUNAWAY)`` is true for nan, inf and runaway values alike
             bad = ~(mag <= RUNAWAY).all(axis=2)
             pole = mag[:, :, 1] > sc.theta_max
@@ -521,7 +533,8 @@ class _TrajectoryLog:
 
 def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
                  episodes: list[int] | np.ndarray, backend: Literal["rollout", "step"] = "rollout",
-                 nthread: int | None = None, trajectory: bool = False) -> BatchResult:
+                 nthread: int | None = None, trajectory: bool = False,
+                 initial_states: np.ndarray | None = None) -> BatchResult:
     """Run episodes ``episodes`` of the run seeded ``seed`` through the closed loop.
 
     Episode ``e`` draws everything from ``default_rng(episode_seed(seed, e))``, so its result does
@@ -536,6 +549,8 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
     seed : the run's seed; episodes : episode numbers to run
     backend, nthread : see :class:`Simulator`
     trajectory : keep full trajectories (for recordings), not only the streamed metrics
+    initial_states : optional (len(episodes), 4) initial states replacing the scenario's
+        ``x0``/``x0_std`` draw (e.g. a region-of-attraction grid)
     """
     episodes = [int(e) for e in episodes]
     seeds = [episode_seed(seed, e) for e in episodes]
@@ -543,7 +558,7 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
     n = len(episodes)
     log = _TrajectoryLog() if trajectory else None
     with Simulator(plant, scenario, backend=backend, nthread=nthread) as sim:
-        x0 = sim.reset(gens)
+        x0 = sim.reset(gens, initial_states=initial_states)
         policy.reset(n, x0.copy() if scenario.estimate0 == "true" else np.zeros((n, 4)))
         est = policy.estimator
         for _ in range(sim.n_periods):
