@@ -1,4 +1,4 @@
-"""The ``pendulum-lqg`` command: ``design``, ``run``, ``bench``, ``perf``.
+"""The ``pendulum-lqg`` command: ``design``, ``run``, ``bench``, ``perf``, ``report``.
 
 Only argument parsing and presentation live here; every computation is a library call. Heavy
 imports (numpy, MuJoCo, python-control, rich) happen inside the commands so ``--help`` is instant.
@@ -142,6 +142,16 @@ def build_parser() -> argparse.ArgumentParser:
                    help="record the worst/median/best/first-failing episode of each configuration")
     p.add_argument("--nthread", type=_nonneg_int, default=None, help="rollout threads")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    p = sub.add_parser("report", help="turn results folders into a Markdown report with PNG figures",
+                       description="Read results folders written by `pendulum-lqg bench` (grids and "
+                                   "the margins / roa studies) and write report.md with tables and "
+                                   "PNG figures.")
+    p.add_argument("results", nargs="+", metavar="RESULTS",
+                   help="results folders, or a folder holding several (e.g. results_small)")
+    p.add_argument("--out", default=None,
+                   help="report folder (default: <RESULTS>/report for one folder argument, else "
+                        "report/)")
 
     p = sub.add_parser("perf", help="throughput: closed loop vs raw mujoco.rollout, single path, memory")
     p.add_argument("--episodes", type=_positive_int, default=1024)
@@ -420,6 +430,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     spec = load_spec(args.experiment).with_overrides(episodes=args.episodes, seed=args.seed)
     out = ResultsDir(args.out or Path("results") / spec.name)
     out.prepare(spec, force=args.force, resume=args.resume)
+    if spec.study is not None:
+        return _bench_study(spec, out, args)
     units = spec.units()
     done = out.done()
     todo = [u for u in units if u.key not in done]
@@ -454,6 +466,24 @@ def cmd_bench(args: argparse.Namespace) -> int:
     sys.stdout.write((out.path / "summary.md").read_text())
     print(f"\nresults: {out.path}/episodes.csv, summary.md, summary.json", file=sys.stderr)
     del summary
+    return 0
+
+
+def _bench_study(spec: Any, out: Any, args: argparse.Namespace) -> int:
+    """``bench`` of an analysis study (``study = "margins" | "roa"`` in the TOML)."""
+    from pendulum_lqg.analysis.studies import run_study
+
+    log = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
+    try:
+        run_study(spec, out, nthread=args.nthread, log=log)
+    except KeyboardInterrupt:
+        print(f"interrupted: finished configurations are saved in {out.path}; complete them with: "
+              f"pendulum-lqg bench {args.experiment} --resume --out {out.path}", file=sys.stderr)
+        return 130
+    finally:
+        out.release()
+    sys.stdout.write((out.path / "summary.md").read_text())
+    print(f"\nresults: {out.path}/summary.md, summary.json", file=sys.stderr)
     return 0
 
 
@@ -518,6 +548,20 @@ def _record_bench(spec: Any, out: Any, summary: Any, record_dir: Any, nthread: A
               file=sys.stderr)
 
 
+# ---- report --------------------------------------------------------------------------------------
+def cmd_report(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from pendulum_lqg.report import make_report
+
+    paths = [Path(p) for p in args.results]
+    out = Path(args.out) if args.out else (paths[0] / "report" if len(paths) == 1
+                                           else Path("report"))
+    report = make_report(paths, out)
+    print(f"report: {report}", file=sys.stderr)
+    return 0
+
+
 # ---- perf ----------------------------------------------------------------------------------------
 def cmd_perf(args: argparse.Namespace) -> int:
     from pendulum_lqg.perf import run_perf
@@ -533,7 +577,8 @@ def cmd_perf(args: argparse.Namespace) -> int:
     return 0
 
 
-COMMANDS = {"design": cmd_design, "run": cmd_run, "bench": cmd_bench, "perf": cmd_perf}
+COMMANDS = {"design": cmd_design, "run": cmd_run, "bench": cmd_bench, "perf": cmd_perf,
+            "report": cmd_report}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

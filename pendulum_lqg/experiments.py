@@ -23,6 +23,10 @@ An experiment file describes a grid::
     policy = ["dlqr+luenberger", "dlqr+kalman"]
     noise_scale = [0.0, 1.0]
 
+Analysis studies (not plain grids) add ``study = "margins"`` or ``study = "roa"`` and a table of the
+same name with the study's parameters; ``pendulum-lqg bench`` hands them to
+:func:`pendulum_lqg.analysis.studies.run_study`.
+
 Grid keys: ``policy`` ("controller+observer"), ``controller``, ``observer``, ``noise_scale``,
 ``control_period``, ``duration``, ``theta0``, ``estimate0``, ``discretization``,
 ``pole_mass_scale``, ``pole_length_scale``, ``cart_mass_scale``. Unknown keys anywhere are an error
@@ -48,7 +52,11 @@ from pendulum_lqg.plant import ModelOverrides
 from pendulum_lqg.policy import CONTROLLERS, OBSERVERS, DesignSpec
 
 TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "scenario", "noise", "design",
-            "model", "grid")
+            "model", "grid", "study", "margins", "roa")
+#: Analysis studies that are not plain grids: ``study = "NAME"`` plus an optional ``[NAME]`` table of
+#: its parameters; the grid still defines the configurations the study runs on
+#: (see :mod:`pendulum_lqg.analysis.studies`).
+STUDIES = ("margins", "roa")
 GRID_KEYS = ("policy", "controller", "observer", "noise_scale", "control_period", "duration",
              "theta0", "estimate0", "discretization", "pole_mass_scale", "pole_length_scale",
              "cart_mass_scale")
@@ -122,6 +130,8 @@ class ExperimentSpec:
     chunk: int
     configurations: tuple[Configuration, ...]
     source: dict[str, object] = field(default_factory=dict)
+    study: str | None = None
+    study_params: dict[str, object] = field(default_factory=dict)
 
     def with_overrides(self, *, episodes: int | None = None, seed: int | None = None,
                        ) -> ExperimentSpec:
@@ -228,6 +238,17 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment") -> Experime
         if bad:
             known = CONTROLLERS if key == "controller" else OBSERVERS
             raise ConfigError(f"grid.{key}: unknown {bad[0]!r}; expected one of " + ", ".join(known))
+    study = data.get("study")
+    study_params: dict[str, object] = {}
+    if study is not None:
+        if study not in STUDIES:
+            raise ConfigError(f"study: unknown {study!r}; expected one of " + ", ".join(STUDIES))
+        from pendulum_lqg.analysis.studies import parse_study_params
+
+        study_params = parse_study_params(str(study), data.get(str(study), {}))  # type: ignore[arg-type]
+    for other in STUDIES:
+        if other in data and other != study:
+            raise ConfigError(f"{other}: a [{other}] table needs study = {other!r}")
     episodes = _as_int("episodes", data.get("episodes", 100), 1)
     seed = _as_int("seed", data.get("seed", 0), 0)
     chunk = _as_int("chunk", data.get("chunk", 250), 1)
@@ -242,7 +263,8 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment") -> Experime
         configs.append(cfg)
     return ExperimentSpec(name=str(data.get("name", name)), description=str(
         data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,
-        configurations=tuple(configs), source=dict(data))
+        configurations=tuple(configs), source=dict(data),
+        study=None if study is None else str(study), study_params=study_params)
 
 
 def load_spec(name_or_path: str) -> ExperimentSpec:
