@@ -60,7 +60,8 @@ def period_integrals(x_start: np.ndarray, states: np.ndarray, u: np.ndarray, fai
         t_alive = mask.sum(axis=1) * h
         xs = np.where(mask[:, :, None], xs, 0.0)
     else:
-        t_alive = np.full(xs.shape[0], k * h)
+        t_alive = np.empty(xs.shape[0])
+        t_alive.fill(k * h)
     sq = (xs * xs).sum(axis=1)                                               # (n, 4)
     cost = h * np.einsum("ni,i->n", sq, Q) + R * u * u * t_alive
     return xs, t_alive, sq, cost

@@ -149,20 +149,27 @@ class NoiseStream:
                 self._gens[r] = g
             self._pos[rows] = CHUNK_PERIODS
 
-    def draw(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Unit normals for the next period of each row: process (len, n_proc), meas (len, 2)."""
+    def draw(self, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Unit normals for the next period of each row (default: every row): process
+        (len, n_proc), meas (len, 2)."""
+        n = self._pos.size if rows is None else rows.size
         if not self.enabled:
-            return np.zeros((rows.size, self.n_proc)), np.zeros((rows.size, 2))
-        pos = self._pos[rows]
-        for r in rows[pos >= CHUNK_PERIODS]:
-            self._block[r] = self._gens[r].standard_normal((CHUNK_PERIODS, self.width))
-            self._pos[r] = 0
-        pos = self._pos[rows]
-        if rows.size == self._pos.size and rows.size and np.all(pos == pos[0]):
-            z = self._block[:, pos[0]]           # common case: the whole batch in step
+            return np.zeros((n, self.n_proc)), np.zeros((n, 2))
+        pos = self._pos if rows is None else self._pos[rows]
+        stale = pos >= CHUNK_PERIODS
+        if stale.any():
+            for r in (np.nonzero(stale)[0] if rows is None else rows[stale]):
+                self._block[r] = self._gens[r].standard_normal((CHUNK_PERIODS, self.width))
+                self._pos[r] = 0
+            pos = self._pos if rows is None else self._pos[rows]
+        if rows is None:
+            p0 = pos[0] if n else 0
+            # common case: the whole batch in step
+            z = self._block[:, p0] if n and (pos == p0).all() else self._block[np.arange(n), pos]
+            self._pos += 1
         else:
             z = self._block[rows, pos]
-        self._pos[rows] += 1
+            self._pos[rows] += 1
         return z[:, : self.n_proc], z[:, self.n_proc:]
 
     def select(self, rows: np.ndarray) -> None:

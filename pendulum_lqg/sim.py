@@ -314,7 +314,7 @@ class Simulator:
         once before each :meth:`step`.
         """
         if rows is None:
-            z_proc, z_meas = self.noise.draw(np.arange(self.n))
+            z_proc, z_meas = self.noise.draw()
             self._z_proc = z_proc
             return self.x[:, :2] + self.noise.measurement(z_meas)
         rows = np.asarray(rows)
@@ -334,7 +334,8 @@ class Simulator:
         x_hat : (n, 4) the estimate the controller used at this sample, for the estimation-error
             metric (optional)
         """
-        u = np.clip(np.asarray(u, dtype=float).reshape(-1), -self.u_max, self.u_max)
+        # saturation (np.minimum/np.maximum: np.clip's values, at a fraction of its overhead)
+        u = np.minimum(np.maximum(np.asarray(u, dtype=float).reshape(-1), -self.u_max), self.u_max)
         n = self.n
         if u.shape[0] != n:
             raise ConfigError(f"u: expected {n} forces, got {u.shape[0]}")
@@ -423,8 +424,11 @@ class Simulator:
             p, th, v, w = np.abs(states).max(axis=(0, 1)).tolist()
             if (th <= sc.theta_max and p < self.track and v <= RUNAWAY and w <= RUNAWAY
                     and float(np.abs(x_end).max()) <= RUNAWAY and not reset_flag.any()):
-                return (np.zeros(n, dtype=bool), np.full(n, FAIL_NONE, dtype=np.int8),
-                        np.full(n, self.k))
+                reason = np.empty(n, dtype=np.int8)
+                reason.fill(FAIL_NONE)
+                fail_step = np.empty(n, dtype=np.int64)
+                fail_step.fill(self.k)
+                return np.zeros(n, dtype=bool), reason, fail_step
         with np.errstate(invalid="ignore"):
             mag = np.abs(states)
             # ``not (|x| <= RUNAWAY)`` is true for nan, inf and runaway values alike
