@@ -1,0 +1,71 @@
+"""Physics steps per second of ``env.step``: pendulum_lqg/CartPoleLQG-v0 vs InvertedPendulum-v5.
+
+Both envs are made with ``gymnasium.make`` (so both carry the same wrappers: TimeLimit,
+OrderEnforcing, PassiveEnvChecker) and run the same number of physics steps per env step: ours
+has h = 1 ms and T = 10 ms (k = 10); InvertedPendulum-v5 gets ``frame_skip=k``. Only the
+``env.step`` calls are timed (action selection and resets are outside the clock); the figure is
+the best of ``--repeats`` runs. Our env is driven by the LQG agent (it balances, the common case);
+InvertedPendulum-v5 by zero force.
+
+Usage::
+
+    uv run python experiments/env_benchmark.py [--steps 20000] [--repeats 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import pendulum_lqg
+from pendulum_lqg.agent import LQGAgent
+
+
+def time_steps(env: gym.Env, steps: int, policy: object | None, seed: int) -> float:
+    """Seconds spent inside ``env.step`` over ``steps`` steps (resets are not timed)."""
+    obs, _ = env.reset(seed=seed)
+    if policy is not None:
+        policy.reset()
+    zero = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+    clock = time.perf_counter
+    spent = 0.0
+    for _ in range(steps):
+        action = policy.act(obs) if policy is not None else zero
+        t0 = clock()
+        obs, _, terminated, truncated, _ = env.step(action)
+        spent += clock() - t0
+        if terminated or truncated:
+            obs, _ = env.reset()
+            if policy is not None:
+                policy.reset()
+    return spent
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=20000, help="env steps per timed run")
+    ap.add_argument("--repeats", type=int, default=5, help="timed runs per env (best is kept)")
+    args = ap.parse_args()
+
+    ours = gym.make(pendulum_lqg.ENV_ID)
+    k = ours.unwrapped.frame_skip
+    agent = LQGAgent(ours)
+    theirs = gym.make("InvertedPendulum-v5", frame_skip=k)
+    assert theirs.unwrapped.frame_skip == k
+    results = {}
+    for name, env, policy in (("CartPoleLQG-v0", ours, agent),
+                              ("InvertedPendulum-v5", theirs, None)):
+        time_steps(env, 500, policy, seed=1)     # warm-up
+        best = min(time_steps(env, args.steps, policy, seed=r) for r in range(args.repeats))
+        results[name] = args.steps * k / best
+        print(f"{name:>20}: {args.steps * k / best:12,.0f} physics steps/s "
+              f"({best / args.steps * 1e6:6.1f} µs per env.step, {k} physics steps each)")
+    ratio = results["CartPoleLQG-v0"] / results["InvertedPendulum-v5"]
+    print(f"{'ratio':>20}: {ratio:.2f}× (CartPoleLQG-v0 / InvertedPendulum-v5, same process)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,549 @@
+"""Gymnasium environments on the one simulation core: a single env and a native batched vector env.
+
+Both are thin adapters over :class:`~pendulum_lqg.sim.Simulator`: the plant, the noise models, the
+saturation, the failure rule and the cost are the sim core's; nothing here steps MuJoCo, draws
+noise or integrates a cost. The ids are registered in ``pendulum_lqg/__init__.py``
+(:data:`pendulum_lqg.ENV_ID`).
+
+One env step is one control period ``T``: the core's measure → act → step order of
+:func:`~pendulum_lqg.sim.run_episodes`, so ``env.reset(seed=episode_seed(s, k))`` replays episode
+``k`` of a ``pendulum-lqg`` run seeded ``s`` bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal, SupportsFloat
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
+from pendulum_lqg.metrics import FAIL_NONE, FAIL_REASONS
+from pendulum_lqg.noise import LECTURE_V, NoiseModel
+from pendulum_lqg.plant import ModelOverrides, Plant, load_plant
+from pendulum_lqg.sim import Scenario, Simulator
+
+ObservationMode = Literal["measurement", "state"]
+OBSERVATION_MODES: tuple[str, ...] = ("measurement", "state")
+
+#: The camera of ``models/cartpole.xml`` that frames the whole track, cart and pole.
+CAMERA = "side"
+
+#: Default reward scale: the cost rate [J/s] at which a step's reward is e⁻¹ (the lecture LQG
+#: policy runs at ≈ 3.4 J/s, the full-state LQR at ≈ 0.18 J/s).
+DEFAULT_REWARD_SCALE = 10.0
+
+
+def _positive(name: str, value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer) \
+            or not np.isfinite(value) or value <= 0:
+        raise ConfigError(f"{name}: expected a finite positive number, got {value!r}")
+    return float(value)
+
+
+def _positive_int(name: str, value: object) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+        raise ConfigError(f"{name}: expected a positive integer, got {value!r}")
+    return int(value)
+
+
+@dataclass(frozen=True)
+class EnvConfig:
+    """The validated keywords of :class:`CartPoleLQGEnv` (see its docstring for each).
+
+    ``scenario`` is the :class:`~pendulum_lqg.sim.Scenario` the sim core runs; the rest is the
+    environment's own (observation mode, reward scale, model file).
+    """
+
+    scenario: Scenario
+    observation_mode: ObservationMode
+    reward_scale: float
+    model_path: str | None
+
+    @classmethod
+    def build(cls, *, control_period: float, duration: float, observation_mode: str,
+              noise_scale: float, process_noise: str,
+              process_density: float | Sequence[float] | None,
+              measurement_variance: float | Sequence[float], x0: Sequence[float],
+              x0_std: Sequence[float], theta_max: float, cost_Q: Sequence[float], cost_R: float,
+              reward_scale: float, model_overrides: Mapping[str, float] | ModelOverrides | None,
+              model_path: str | None) -> EnvConfig:
+        if observation_mode not in OBSERVATION_MODES:
+            raise ConfigError(f"observation_mode: expected 'measurement' or 'state', got "
+                              f"{observation_mode!r}")
+        if process_noise not in ("state", "force"):
+            raise ConfigError(f"process_noise: expected 'state' or 'force', got {process_noise!r}")
+        if process_density is None:
+            if process_noise == "force":
+                raise ConfigError("process_density: required with process_noise='force' "
+                                  "(2 densities, [N²·s, N²m²·s])")
+            noise = NoiseModel(measurement_variance=measurement_variance,  # type: ignore[arg-type]
+                               scale=noise_scale)
+        else:
+            noise = NoiseModel(process=process_noise,  # type: ignore[arg-type]
+                               process_density=process_density,  # type: ignore[arg-type]
+                               measurement_variance=measurement_variance,  # type: ignore[arg-type]
+                               scale=noise_scale)
+        if model_overrides is None:
+            overrides = ModelOverrides()
+        elif isinstance(model_overrides, ModelOverrides):
+            overrides = model_overrides
+        elif isinstance(model_overrides, Mapping):
+            overrides = ModelOverrides.from_mapping(dict(model_overrides))
+        else:
+            raise ConfigError(f"model_overrides: expected a mapping or a ModelOverrides, got "
+                              f"{model_overrides!r}")
+        if model_path is not None and not isinstance(model_path, str):
+            raise ConfigError(f"model_path: expected a path string, got {model_path!r}")
+        scenario = Scenario(control_period=control_period, duration=duration, noise=noise,
+                            x0=tuple(x0), x0_std=tuple(x0_std), theta_max=theta_max,
+                            cost_Q=tuple(cost_Q), cost_R=cost_R, overrides=overrides)
+        return cls(scenario=scenario, observation_mode=observation_mode,  # type: ignore[arg-type]
+                   reward_scale=_positive("reward_scale", reward_scale), model_path=model_path)
+
+    def make_simulator(self, *, nthread: int | None) -> tuple[Plant, Simulator]:
+        plant = load_plant(self.model_path, overrides=self.scenario.overrides)
+        sim = Simulator(plant, self.scenario, backend="rollout", nthread=nthread,
+                        streamed_metrics=False)
+        return plant, sim
+
+
+def step_reward(cost: np.ndarray, failed: np.ndarray, scale_dt: float) -> np.ndarray:
+    """``r = exp(−c / (s·T))`` for a period that survived, ``0`` for the period that failed.
+
+    One function for the single and the vector env, so both give the same floats.
+    """
+    return np.where(failed, 0.0, np.exp(-cost / scale_dt))
+
+
+def _action_force(action: object, n: int) -> np.ndarray:
+    """Forces (n,) float64 from an action of shape (1,) (single env) or (n, 1) / (n,) (vector)."""
+    if type(action) is np.ndarray and action.size == n and action.ndim <= 2 \
+            and action.dtype.kind == "f":                      # the common case, kept cheap
+        u = action.astype(np.float64).reshape(n)
+        if (math.isfinite(u[0]) if n == 1 else bool(np.isfinite(u).all())):
+            return u
+        raise PendulumLQGError(f"action: expected finite forces, got {u!r}")
+    try:
+        u = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ShapeError(f"action: expected {n} force(s) in newtons, got {action!r}") from exc
+    if u.size != n or u.ndim > 2:
+        want = "(1,)" if n == 1 else f"({n}, 1)"
+        raise ShapeError(f"action: expected shape {want}, found {u.shape}")
+    u = u.reshape(n)
+    if not np.all(np.isfinite(u)):
+        raise PendulumLQGError(f"action: expected finite forces, got {u!r}")
+    return u
+
+
+class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
+    """
+    ## Description
+    The MuJoCo cart-pole of ``models/cartpole.xml`` (a 1 kg cart on a ±2.4 m rail carrying a
+    uniform 1 m, 0.1 kg pole; a ±10 N motor) balanced upright under process and measurement noise:
+    the stochastic LQG problem of the lecture, as a Gymnasium environment. It runs on the same
+    simulation core as ``pendulum-lqg run`` / ``bench`` — same plant, noise models, saturation,
+    failure rule and cost — so an agent is scored exactly as the benchmark scores its policies.
+    One step is one control period ``T`` (default 10 ms = 10 physics steps of 1 ms): the agent's
+    force is held (zero-order hold) over the period.
+
+    ## Action Space
+    A `Box(-10, 10, (1,), float32)` (bounds read from the actuator `ctrlrange` × `gear`):
+
+    | Num | Action                   | Min | Max | Name (in XML) | Joint | Type (Unit) |
+    |-----|--------------------------|-----|-----|---------------|-------|-------------|
+    | 0   | horizontal force on cart | -10 | 10  | force         | slide | force (N)   |
+
+    Forces outside the range are saturated (as in the benchmark). Actions are applied at float64
+    precision: a float64 action is used as given (the LQG agent returns float64, so its forces —
+    and J — equal the benchmark's bit for bit); a float32 one is widened.
+
+    ## Observation Space
+    `observation_mode="measurement"` (default, the LQG problem): the noisy measurement
+    `y = [p, θ] + v`, `v ~ N(0, V)` per sample, a `Box(-inf, inf, (2,), float64)`:
+
+    | Num | Observation                  | Min  | Max | Name (in XML)                   | Joint | Unit |
+    |-----|------------------------------|------|-----|---------------------------------|-------|------|
+    | 0   | cart position p (+ noise)    | -Inf | Inf | slider (sensor `cart_position`) | slide | m    |
+    | 1   | pole angle θ (+ noise)       | -Inf | Inf | hinge (sensor `pole_angle`)     | hinge | rad  |
+
+    `observation_mode="state"`: the true state `x = [p, θ, ṗ, θ̇]`, a `Box(-inf, inf, (4,), float64)`
+    (rows 0–1 as above without noise; 2: cart velocity ṗ (m/s), slider; 3: pole rate θ̇ (rad/s),
+    hinge). θ = 0 is upright, θ > 0 tips the pole towards +x.
+
+    The observation after the step in which the episode failed is noise-free (that period's
+    noise is never drawn, as in the benchmark).
+
+    ## Rewards
+    With ``c`` the quadratic cost of the step, ``c = ∫ xᵀ diag(cost_Q) x + cost_R u² dt`` over the
+    period (the benchmark's J, integrated at the physics step):
+
+    - a step that does not fail: `r = exp(−c / (reward_scale · T))` ∈ (0, 1] — 1 at rest upright with
+      no force, e⁻¹ at a mean cost rate of `reward_scale` J/s;
+    - the step in which the episode fails: `r = 0`, and the episode ends.
+
+    Failing therefore never pays: from any state, failing now returns 0 while any continuation
+    that does not fail returns more than 0. `info` carries the exact cost, so agents are compared
+    on J and success exactly as ``bench`` compares policies:
+
+    | key            | value                                                            |
+    |----------------|------------------------------------------------------------------|
+    | `cost`         | `c`, the LQ cost of this step (0 after reset)                    |
+    | `running_cost` | J so far in the episode (the benchmark's `cost` at the end)      |
+    | `state`        | the true state `[p, θ, ṗ, θ̇]` (4,) at the new sample            |
+    | `y_true`       | the noise-free measurement `[p, θ]` (2,)                         |
+    | `failure_reason` | `""`, `"pole_fell"`, `"track_limit"` or `"diverged"`           |
+    | `time`         | time of the new sample [s]                                       |
+
+    ## Starting State
+    `x₀ ~ N(x0, diag(x0_std²))`, default `x0 = [0, 0.1, 0, 0]` (the pole tilted 0.1 rad), `x0_std = 0`:
+    the lecture's initial condition. Drawn from `self.np_random` (seeded by `reset(seed=...)`),
+    which then draws all of the episode's noise.
+
+    ## Episode End
+    - Termination (failure, the benchmark's rule): `|θ| > theta_max` (default 0.5 rad), the cart at
+      the end of the track (`|p| ≥ 2.4 m`, the slider `range`), or a non-finite / runaway state —
+      checked at every physics step.
+    - Truncation: after `duration` seconds (default 10 s = 1000 steps), i.e. an episode survives
+      the benchmark's horizon; the env truncates itself at its own duration (the registered
+      `max_episode_steps`, 1000, is that of the default duration).
+
+    ## Arguments
+    `gymnasium.make("pendulum_lqg/CartPoleLQG-v0", **kwargs)`, all keywords optional:
+
+    | Parameter              | Type                 | Default       | Description                       |
+    |------------------------|----------------------|---------------|-----------------------------------|
+    | `control_period`       | float (s)            | `0.01`        | T, a multiple of the XML timestep |
+    | `duration`             | float (s)            | `10.0`        | episode length (truncation)       |
+    | `observation_mode`     | str                  | "measurement" | or "state"; see Observation Space |
+    | `noise_scale`          | float ≥ 0            | `1.0`         | multiplies both noise std devs    |
+    | `process_noise`        | str                  | "state"       | F = I₄ (lecture), or "force" [1]  |
+    | `process_density`      | float or list        | `4e-4` (×4)   | spectral density W (units²·s) [2] |
+    | `measurement_variance` | float or list of 2   | `0.01`        | per-sample V of `[p, θ]` (m², rad²) |
+    | `x0`, `x0_std`         | 4 floats each        | see above     | initial-state mean / std dev      |
+    | `theta_max`            | float (rad)          | `0.5`         | failure angle                     |
+    | `cost_Q`, `cost_R`     | 4 floats, float      | `1`, `1`      | weights of the cost J             |
+    | `reward_scale`         | float (J/s)          | `10.0`        | see Rewards                       |
+    | `model_overrides`      | mapping              | `None`        | simulated-plant changes [3]       |
+    | `model_path`           | str                  | bundled XML   | another MJCF cart-pole            |
+    | `render_mode`          | str or None          | `None`        | "rgb_array": `mujoco.Renderer`    |
+    | `width`, `height`      | int (px)             | `640`, `480`  | image size (≤ offscreen buffer)   |
+
+    [1] generalised forces on slider and hinge through `qfrc_applied`, redrawn every physics step.
+    [2] 4 entries for "state" (default: the lecture's `0.04·T·I₄` at T = 0.01 s); required, with
+    2 entries (N²·s, N²m²·s), for "force". [3] model mismatch: a mapping (or a `ModelOverrides`)
+    of `pole_mass`, `pole_length`, `cart_mass`, their `*_scale`, `force_limit`, `timestep`.
+
+    Invalid values raise :class:`~pendulum_lqg.errors.ConfigError` naming the parameter.
+
+    ## Version History
+    * v0: Initial version (the lecture scenario; reward `exp(−c/(s·T))`, 0 on failure).
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 100}  # noqa: RUF012
+
+    def __init__(self, *, control_period: float = 0.01, duration: float = 10.0,
+                 observation_mode: ObservationMode = "measurement", noise_scale: float = 1.0,
+                 process_noise: Literal["state", "force"] = "state",
+                 process_density: float | Sequence[float] | None = None,
+                 measurement_variance: float | Sequence[float] = LECTURE_V,
+                 x0: Sequence[float] = (0.0, 0.1, 0.0, 0.0),
+                 x0_std: Sequence[float] = (0.0, 0.0, 0.0, 0.0), theta_max: float = 0.5,
+                 cost_Q: Sequence[float] = (1.0, 1.0, 1.0, 1.0), cost_R: float = 1.0,
+                 reward_scale: float = DEFAULT_REWARD_SCALE,
+                 model_overrides: Mapping[str, float] | ModelOverrides | None = None,
+                 model_path: str | None = None, render_mode: str | None = None,
+                 width: int = 640, height: int = 480) -> None:
+        self.config = EnvConfig.build(
+            control_period=control_period, duration=duration, observation_mode=observation_mode,
+            noise_scale=noise_scale, process_noise=process_noise, process_density=process_density,
+            measurement_variance=measurement_variance, x0=x0, x0_std=x0_std, theta_max=theta_max,
+            cost_Q=cost_Q, cost_R=cost_R, reward_scale=reward_scale,
+            model_overrides=model_overrides, model_path=model_path)
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ConfigError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
+        self.render_mode = render_mode
+        self.scenario = self.config.scenario
+        self.observation_mode = self.config.observation_mode
+        self.plant, self._sim = self.config.make_simulator(nthread=0)
+        self.width, self.height = _image_size(self.plant, width, height)
+        #: control period T [s] and physics steps per env step
+        self.dt, self.frame_skip = self._sim.dt, self._sim.k
+        self.max_episode_steps = self._sim.n_periods
+        self._scale_dt = self.config.reward_scale * self.dt
+        self.metadata = {**type(self).metadata, "render_fps": round(1.0 / self.dt)}
+        lo, hi = self.plant.force_limit
+        self.action_space = spaces.Box(np.float32(lo), np.float32(hi), shape=(1,),
+                                       dtype=np.float32)
+        dim = 2 if self.observation_mode == "measurement" else 4
+        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(dim,), dtype=np.float64)
+        self._running_cost = 0.0
+        self._ended = False
+        self._renderer: mujoco.Renderer | None = None
+        self._render_data: mujoco.MjData | None = None
+
+    # ---- episode -----------------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None,
+              ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode: draw x₀, then the first measurement, from ``self.np_random``.
+
+        ``options`` takes no keys (an unknown key is an error).
+        """
+        super().reset(seed=seed)
+        if options:
+            raise ConfigError(f"options: unknown key {sorted(options)[0]!r}; reset takes none")
+        self._sim.reset([self.np_random])
+        self._running_cost = 0.0
+        self._ended = False
+        return self._observe(), self._info(0.0, FAIL_NONE)
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, SupportsFloat, bool, bool,
+                                                 dict[str, Any]]:
+        """One control period with the force ``action[0]`` [N] held."""
+        if self._ended:
+            raise PendulumLQGError("step: the episode has failed; call reset() first")
+        sim = self._sim
+        res = sim.step(_action_force(action, 1))
+        cost = float(res.cost[0])
+        self._running_cost += cost
+        failed = bool(res.failed[0])
+        reward = 0.0 if failed else float(step_reward(res.cost, res.failed, self._scale_dt)[0])
+        if failed:
+            self._ended = True
+            obs = self._noise_free_observation()
+        else:
+            obs = self._observe()
+        truncated = not failed and int(sim.period[0]) >= sim.n_periods
+        return obs, reward, failed, truncated, self._info(cost, int(res.reason[0]))
+
+    def _observe(self) -> np.ndarray:
+        y = self._sim.measure()   # always: it draws this period's process noise too
+        return y[0] if self.observation_mode == "measurement" else self._sim.x[0].copy()
+
+    def _noise_free_observation(self) -> np.ndarray:
+        x = self._sim.x[0]
+        return (x[:2] if self.observation_mode == "measurement" else x).copy()
+
+    def _info(self, cost: float, reason: int) -> dict[str, Any]:
+        x = self._sim.x[0]
+        return {"cost": cost, "running_cost": self._running_cost, "state": x.copy(),
+                "y_true": x[:2].copy(), "failure_reason": FAIL_REASONS[reason],
+                "time": float(self._sim.t[0])}
+
+    @property
+    def running_cost(self) -> float:
+        """J so far in the current episode."""
+        return self._running_cost
+
+    # ---- rendering ---------------------------------------------------------------------------
+    def render(self) -> np.ndarray | None:
+        """An RGB image (height, width, 3) uint8 of the current state (``render_mode="rgb_array"``)."""
+        if self.render_mode is None:
+            gym.logger.warn("render: called without a render_mode; make the env with "
+                            "render_mode='rgb_array'")
+            return None
+        model = self.plant.model
+        if self._renderer is None:
+            self._renderer = mujoco.Renderer(model, self.height, self.width)
+            self._render_data = mujoco.MjData(model)
+        assert self._render_data is not None
+        x = self._sim.x[0] if hasattr(self._sim, "x") else np.zeros(4)
+        self.plant.set_state(self._render_data, x)
+        self._renderer.update_scene(self._render_data, camera=CAMERA)
+        return self._renderer.render()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+            self._render_data = None
+        self._sim.close()
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_renderer"] = state["_render_data"] = None   # GL resources; made again on demand
+        return state
+
+
+def _image_size(plant: Plant, width: int, height: int) -> tuple[int, int]:
+    width, height = _positive_int("width", width), _positive_int("height", height)
+    vis = plant.model.vis.global_
+    if width > vis.offwidth or height > vis.offheight:
+        raise ConfigError(f"width: {width}×{height} exceeds the model's offscreen buffer "
+                          f"{vis.offwidth}×{vis.offheight} (<visual><global offwidth/offheight>)")
+    return width, height
+
+
+class CartPoleLQGVectorEnv(VectorEnv):
+    """``num_envs`` :class:`CartPoleLQGEnv` episodes stepped together on one batched sim core.
+
+    The vector entry point of ``pendulum_lqg/CartPoleLQG-v0``
+    (``gymnasium.make_vec(id, num_envs=N)``): one ``mujoco.rollout`` call per step for the whole
+    batch. Each sub-env owns its generator, seeded as :class:`~gymnasium.vector.SyncVectorEnv`
+    seeds its sub-envs (``reset(seed=s)`` → ``s, s+1, …``; or a list of seeds; ``None`` → fresh
+    entropy), so sub-env ``i`` gives exactly the episodes of a single env reset with the same seed
+    — after an autoreset too (the generator continues, as a single env's ``reset()`` without a seed).
+
+    Autoreset mode ``SAME_STEP``: a sub-env that ends is reset within the same ``step``; the
+    returned observation and ``info`` are the new episode's, and ``info["final_obs"]`` /
+    ``info["final_info"]`` (with masks ``_final_obs`` / ``_final_info``) hold the last ones, as
+    ``SyncVectorEnv(autoreset_mode=SAME_STEP)`` does. Rendering is not supported.
+
+    Parameters
+    ----------
+    num_envs : number of sub-envs
+    max_episode_steps : truncate after this many steps (``make_vec`` passes the registered
+        value); the env's own ``duration`` also truncates, whichever comes first
+    nthread : rollout threads (default: the CPU cores, at most 8); results do not depend on it
+    the other keywords : as :class:`CartPoleLQGEnv`
+    """
+
+    metadata: dict[str, Any] = {"render_modes": [],  # noqa: RUF012
+                                "autoreset_mode": AutoresetMode.SAME_STEP}
+
+    def __init__(self, num_envs: int, *, max_episode_steps: int | None = None,
+                 nthread: int | None = None, control_period: float = 0.01,
+                 duration: float = 10.0, observation_mode: ObservationMode = "measurement",
+                 noise_scale: float = 1.0, process_noise: Literal["state", "force"] = "state",
+                 process_density: float | Sequence[float] | None = None,
+                 measurement_variance: float | Sequence[float] = LECTURE_V,
+                 x0: Sequence[float] = (0.0, 0.1, 0.0, 0.0),
+                 x0_std: Sequence[float] = (0.0, 0.0, 0.0, 0.0), theta_max: float = 0.5,
+                 cost_Q: Sequence[float] = (1.0, 1.0, 1.0, 1.0), cost_R: float = 1.0,
+                 reward_scale: float = DEFAULT_REWARD_SCALE,
+                 model_overrides: Mapping[str, float] | ModelOverrides | None = None,
+                 model_path: str | None = None, render_mode: str | None = None) -> None:
+        self.num_envs = _positive_int("num_envs", num_envs)
+        if render_mode is not None:
+            raise ConfigError(f"render_mode: the vector env does not render, got {render_mode!r}")
+        self.render_mode = None
+        self.config = EnvConfig.build(
+            control_period=control_period, duration=duration, observation_mode=observation_mode,
+            noise_scale=noise_scale, process_noise=process_noise, process_density=process_density,
+            measurement_variance=measurement_variance, x0=x0, x0_std=x0_std, theta_max=theta_max,
+            cost_Q=cost_Q, cost_R=cost_R, reward_scale=reward_scale,
+            model_overrides=model_overrides, model_path=model_path)
+        if nthread is not None and (isinstance(nthread, bool) or not isinstance(nthread, int)
+                                    or nthread < 0):
+            raise ConfigError(f"nthread: expected a non-negative integer, got {nthread!r}")
+        self.scenario = self.config.scenario
+        self.observation_mode = self.config.observation_mode
+        self.plant, self._sim = self.config.make_simulator(nthread=nthread)
+        self.dt, self.frame_skip = self._sim.dt, self._sim.k
+        limit = self._sim.n_periods
+        if max_episode_steps is not None:
+            limit = min(limit, _positive_int("max_episode_steps", max_episode_steps))
+        self.max_episode_steps = limit
+        self._scale_dt = self.config.reward_scale * self.dt
+        self.metadata = {**type(self).metadata, "render_fps": round(1.0 / self.dt)}
+        lo, hi = self.plant.force_limit
+        self.single_action_space = spaces.Box(np.float32(lo), np.float32(hi), shape=(1,),
+                                              dtype=np.float32)
+        dim = 2 if self.observation_mode == "measurement" else 4
+        self.single_observation_space = spaces.Box(-np.inf, np.inf, shape=(dim,),
+                                                   dtype=np.float64)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self._gens: list[np.random.Generator] = []
+        self._running_cost = np.zeros(self.num_envs)
+        self._all = np.arange(self.num_envs)
+
+    def reset(self, *, seed: int | Sequence[int] | None = None,
+              options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset every sub-env; ``seed``: an int ``s`` (sub-env i gets ``s + i``), a list of
+        ``num_envs`` seeds, or ``None``."""
+        n = self.num_envs
+        if seed is None or isinstance(seed, int | np.integer):
+            super().reset(seed=None if seed is None else int(seed))
+            seeds: list[int | None] = [None] * n if seed is None else \
+                [int(seed) + i for i in range(n)]
+        else:
+            seeds = [int(s) for s in seed]
+            if len(seeds) != n:
+                raise ConfigError(f"seed: expected {n} seeds, got {len(seeds)}")
+        if options:
+            raise ConfigError(f"options: unknown key {sorted(options)[0]!r}; reset takes none")
+        self._gens = [seeding.np_random(s)[0] for s in seeds]
+        self._sim.reset(self._gens, ids=self._all)
+        self._running_cost = np.zeros(n)
+        y = self._sim.measure()
+        obs = y if self.observation_mode == "measurement" else self._sim.x.copy()
+        return obs, self._infos(self._all, np.zeros(n), np.full(n, FAIL_NONE))
+
+    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                                 dict[str, Any]]:
+        sim, n = self._sim, self.num_envs
+        res = sim.step(_action_force(actions, n))
+        self._running_cost += res.cost
+        terminated = res.failed
+        truncated = ~terminated & (sim.period >= self.max_episode_steps)
+        reward = step_reward(res.cost, terminated, self._scale_dt)
+        obs = np.empty((n, self.single_observation_space.shape[0]))
+        alive = np.nonzero(~terminated)[0]
+        y = sim.measure(alive) if alive.size < n else sim.measure()
+        obs[alive] = y if self.observation_mode == "measurement" else sim.x[alive]
+        ended = np.nonzero(terminated | truncated)[0]
+        if ended.size == 0:
+            return obs, reward, terminated, truncated, self._infos(self._all, res.cost,
+                                                                   res.reason)
+        failed = np.nonzero(terminated)[0]
+        x = sim.x
+        obs[failed] = x[failed, :2] if self.observation_mode == "measurement" else x[failed]
+        final_info = self._infos(ended, res.cost[ended], res.reason[ended])
+        final_obs = np.full(n, None, dtype=object)
+        for r in ended:
+            final_obs[r] = obs[r].copy()
+        # SAME_STEP autoreset: the ended sub-envs start their next episode now
+        sim.reset([self._gens[r] for r in ended], ids=ended, rows=ended)
+        self._running_cost[ended] = 0.0
+        y = sim.measure(ended)
+        obs[ended] = y if self.observation_mode == "measurement" else sim.x[ended]
+        cost = res.cost.copy()
+        cost[ended] = 0.0
+        reason = res.reason.copy()
+        reason[ended] = FAIL_NONE
+        infos = self._infos(self._all, cost, reason)
+        mask = np.zeros(n, dtype=bool)
+        mask[ended] = True
+        infos.update({"final_obs": final_obs, "_final_obs": mask, "final_info": final_info,
+                      "_final_info": mask.copy()})
+        return obs, reward, terminated, truncated, infos
+
+    def _infos(self, rows: np.ndarray, cost: np.ndarray, reason: np.ndarray) -> dict[str, Any]:
+        """Vector infos (arrays with ``_key`` masks) of ``rows``, as ``SyncVectorEnv`` builds."""
+        n, sim = self.num_envs, self._sim
+        mask = np.zeros(n, dtype=bool)
+        mask[rows] = True
+        full = rows.size == n
+        state = np.zeros((n, 4))
+        state[rows] = sim.x[rows]
+        values: dict[str, np.ndarray] = {
+            "cost": np.zeros(n), "running_cost": np.zeros(n), "state": state,
+            "y_true": state[:, :2].copy(), "failure_reason": np.full(n, None, dtype=object),
+            "time": np.zeros(n)}
+        values["cost"][rows] = cost
+        values["running_cost"][rows] = self._running_cost[rows]
+        values["time"][rows] = sim.t[rows]
+        for r, code in zip(rows, reason, strict=True):
+            values["failure_reason"][r] = FAIL_REASONS[int(code)]
+        out: dict[str, Any] = {}
+        for key, arr in values.items():
+            out[key] = arr
+            out["_" + key] = mask.copy() if not full else np.ones(n, dtype=bool)
+        return out
+
+    def close_extras(self, **kwargs: Any) -> None:
+        self._sim.close()
+
+
+__all__ = ["CAMERA", "DEFAULT_REWARD_SCALE", "CartPoleLQGEnv", "CartPoleLQGVectorEnv", "EnvConfig",
+           "step_reward"]
