@@ -202,7 +202,7 @@ def test_process_noise_covariance_limits():
         (lambda: design.luenberger(A_DI, C_DI, [-1 + 1j, -2.0]), DesignError,
          "poles: pole -1+1j has no complex-conjugate partner"),
         (lambda: design.luenberger(A_DI, C_DI, [-1.0, -1.0]), DesignError,
-         "poles: a pole is repeated 2 times but there are only 1 outputs"),
+         "poles: a pole is repeated 2 times but rank C is only 1"),
         (lambda: design.lqr(A_DI, B_DI, [[1, 0], [0, np.nan]], 1.0), DesignError,
          "Q: contains non-finite entries"),
         (lambda: design.dlqr(PHI_OGATA, GAMMA_OGATA, np.eye(2), 1.0, alpha=0.5), DesignError,

@@ -58,7 +58,10 @@ def as_weight(name: str, value: ArrayLike, n: int, *, definite: bool) -> np.ndar
 
     Scalars and 1-D arrays of length n are accepted as ``s·I`` / ``diag(v)``.
     """
-    arr = np.array(value, dtype=float) if not isinstance(value, np.ndarray) else value.astype(float)
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ShapeError(f"{name}: expected a real matrix, got {type(value).__name__}") from exc
     if arr.ndim == 0:
         arr = arr * np.eye(n)
     elif arr.ndim == 1 and arr.shape[0] == n and n > 1:

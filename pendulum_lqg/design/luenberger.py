@@ -38,14 +38,21 @@ def _place(A: np.ndarray, C: np.ndarray, poles: np.ndarray, what: str) -> np.nda
     if np.linalg.matrix_rank(obs) < n:
         raise DesignError(f"{what}: pair is not observable, so its observer poles cannot be "
                           "placed arbitrarily")
+    # Redundant outputs (rank C < p) would make scipy's place_poles fail: place on the row space
+    # C_r = U_rᵀ C and map back, L = L_r U_rᵀ, so that L C = L_r C_r.
+    U, sv, _ = np.linalg.svd(C, full_matrices=False)
+    rank = int(np.sum(sv > 1e-10 * max(1.0, sv[0])))
+    U_r = U[:, :rank]
+    C_r = U_r.T @ C
     mult = max(int(np.sum(np.abs(poles - p) < 1e-12 * max(1.0, abs(p)))) for p in poles)
-    if mult > C.shape[0]:
-        raise DesignError(f"poles: a pole is repeated {mult} times but there are only "
-                          f"{C.shape[0]} outputs (multiplicity must not exceed rank C)")
+    if mult > rank:
+        raise DesignError(f"poles: a pole is repeated {mult} times but rank C is only {rank} "
+                          "(multiplicity must not exceed rank C)")
     try:
-        return np.asarray(control.place(A.T, C.T, poles)).T
+        L_r = np.asarray(control.place(A.T, C_r.T, poles)).T
     except ValueError as exc:  # scipy.signal.place_poles reports numerical failures this way
         raise DesignError(f"poles: pole placement failed: {exc}") from exc
+    return L_r @ U_r.T
 
 
 def luenberger(A: ArrayLike, C: ArrayLike, poles: ArrayLike) -> ObserverResult:
