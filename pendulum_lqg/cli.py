@@ -543,7 +543,7 @@ def _record_bench(spec: Any, out: Any, summary: Any, record_dir: Any, nthread: A
                   "telling_episodes": picks, "scenario": scenario.to_dict(),
                   "design": _dataclass_dict(dspec)}
         record_episodes(res.trajectories, plant=sim_plant, scenario=scenario, policy=policy,
-                        config=config, path=path)
+                        config=config, path=path, labels=picks)
         print(f"recorded {path} ({', '.join(f'{k}: {v}' for k, v in picks.items())})",
               file=sys.stderr)
 
