@@ -223,3 +223,30 @@ def test_cli_module_imports_no_heavy_dependencies():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
                          check=True).stdout.strip()
     assert out in ("[]", "['numpy']"), out   # gymnasium registration may bring numpy, no more
+
+
+def test_results_are_byte_identical_for_any_thread_count(tmp_path):
+    spec = tmp_path / "small.toml"
+    spec.write_text(SMALL)
+    outs = []
+    for nthread in ("1", "2"):
+        out = tmp_path / f"out{nthread}"
+        assert main(["bench", str(spec), "--out", str(out), "--quiet", "--nthread", nthread]) == 0
+        outs.append(out)
+    for name in ("episodes.csv", "summary.json", "summary.md", "spec.json"):
+        assert (outs[0] / name).read_bytes() == (outs[1] / name).read_bytes(), name
+    # timestamps live apart, in meta.json
+    assert (outs[0] / "meta.json").read_bytes() != (outs[1] / "meta.json").read_bytes()
+
+
+def test_a_second_run_into_a_busy_folder_is_refused(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ".lock").write_text(str(os.getpid()))          # a live writer
+    spec = tmp_path / "small.toml"
+    spec.write_text(SMALL)
+    assert main(["bench", str(spec), "--out", str(out), "--resume", "--quiet"]) == 2
+    assert "is being written by another run" in capsys.readouterr().err
+    (out / ".lock").write_text("999999999")                # a dead writer's stale lock
+    assert main(["bench", str(spec), "--out", str(out), "--resume", "--quiet"]) == 0
+    assert not (out / ".lock").exists()
