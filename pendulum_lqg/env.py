@@ -28,14 +28,15 @@ from gymnasium.vector.utils import batch_space
 from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
 from pendulum_lqg.metrics import FAIL_NONE, FAIL_REASONS
 from pendulum_lqg.noise import LECTURE_V, NoiseModel
-from pendulum_lqg.plant import ModelOverrides, Plant, load_plant
+from pendulum_lqg.plant import CART_BODY, ModelOverrides, Plant, load_plant
 from pendulum_lqg.sim import Scenario, Simulator
 
 ObservationMode = Literal["measurement", "state"]
 OBSERVATION_MODES: tuple[str, ...] = ("measurement", "state")
 
-#: The camera of ``models/cartpole.xml`` that frames the whole track, cart and pole.
-CAMERA = "side"
+#: Rendering camera: tracks the cart from the side (the view of the XML's ``side`` camera, but
+#: close enough to frame cart and pole), at this many pole lengths away.
+CAMERA_DISTANCE_POLE_LENGTHS = 3.0
 
 #: Default reward scale: the cost rate [J/s] at which a step's reward is e⁻¹ (the lecture LQG
 #: policy runs at ≈ 3.4 J/s, the full-state LQR at ≈ 0.18 J/s).
@@ -235,13 +236,14 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     | `reward_scale`         | float (J/s)          | `10.0`        | see Rewards                       |
     | `model_overrides`      | mapping              | `None`        | simulated-plant changes [3]       |
     | `model_path`           | str                  | bundled XML   | another MJCF cart-pole            |
-    | `render_mode`          | str or None          | `None`        | "rgb_array": `mujoco.Renderer`    |
+    | `render_mode`          | str or None          | `None`        | "rgb_array": `mujoco.Renderer` [4] |
     | `width`, `height`      | int (px)             | `640`, `480`  | image size (≤ offscreen buffer)   |
 
     [1] generalised forces on slider and hinge through `qfrc_applied`, redrawn every physics step.
     [2] 4 entries for "state" (default: the lecture's `0.04·T·I₄` at T = 0.01 s); required, with
     2 entries (N²·s, N²m²·s), for "force". [3] model mismatch: a mapping (or a `ModelOverrides`)
     of `pole_mass`, `pole_length`, `cart_mass`, their `*_scale`, `force_limit`, `timestep`.
+    [4] a side view (the XML's `side` camera direction) that tracks the cart at 3 pole lengths.
 
     Invalid values raise :class:`~pendulum_lqg.errors.ConfigError` naming the parameter.
 
@@ -290,6 +292,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         self._ended = False
         self._renderer: mujoco.Renderer | None = None
         self._render_data: mujoco.MjData | None = None
+        self._camera: mujoco.MjvCamera | None = None
 
     # ---- episode -----------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None,
@@ -355,10 +358,16 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         if self._renderer is None:
             self._renderer = mujoco.Renderer(model, self.height, self.width)
             self._render_data = mujoco.MjData(model)
+            cam = mujoco.MjvCamera()
+            cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+            cam.trackbodyid = model.body(CART_BODY).id
+            cam.distance = CAMERA_DISTANCE_POLE_LENGTHS * self.plant.pole_length
+            cam.azimuth, cam.elevation = 90.0, -10.0      # from −y, x to the right: a side view
+            self._camera = cam
         assert self._render_data is not None
         x = self._sim.x[0] if hasattr(self._sim, "x") else np.zeros(4)
         self.plant.set_state(self._render_data, x)
-        self._renderer.update_scene(self._render_data, camera=CAMERA)
+        self._renderer.update_scene(self._render_data, camera=self._camera)
         return self._renderer.render()
 
     def close(self) -> None:
@@ -370,7 +379,8 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
-        state["_renderer"] = state["_render_data"] = None   # GL resources; made again on demand
+        # GL resources (and the camera, which does not pickle) are made again on demand
+        state["_renderer"] = state["_render_data"] = state["_camera"] = None
         return state
 
 
@@ -545,5 +555,5 @@ class CartPoleLQGVectorEnv(VectorEnv):
         self._sim.close()
 
 
-__all__ = ["CAMERA", "DEFAULT_REWARD_SCALE", "CartPoleLQGEnv", "CartPoleLQGVectorEnv", "EnvConfig",
-           "step_reward"]
+__all__ = ["CAMERA_DISTANCE_POLE_LENGTHS", "DEFAULT_REWARD_SCALE", "CartPoleLQGEnv",
+           "CartPoleLQGVectorEnv", "EnvConfig", "step_reward"]

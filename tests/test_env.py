@@ -1,0 +1,441 @@
+"""The Gymnasium environment, its vector env and the LQG agent (issue 4).
+
+Every warning is an error in this module (as in Gymnasium's own env tests); the few that
+``check_env`` always raises for this env are allowed explicitly, by their text.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+# Rendering needs an OpenGL platform; EGL works headless. MuJoCo reads MUJOCO_GL when it is first
+# imported — if that already happened without it (conftest imports the plant), rendering is
+# checked in a subprocess instead.
+_GL_CHOSEN_HERE = "MUJOCO_GL" in os.environ or "mujoco" not in sys.modules
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import pickle  # noqa: E402
+import subprocess  # noqa: E402
+import textwrap  # noqa: E402
+import warnings  # noqa: E402
+
+import gymnasium as gym  # noqa: E402
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from gymnasium.utils.env_checker import check_env  # noqa: E402
+
+import pendulum_lqg  # noqa: E402
+from pendulum_lqg.agent import LQGAgent  # noqa: E402
+from pendulum_lqg.env import CartPoleLQGEnv, CartPoleLQGVectorEnv  # noqa: E402
+from pendulum_lqg.errors import ConfigError, PendulumLQGError  # noqa: E402
+from pendulum_lqg.metrics import summarize  # noqa: E402
+from pendulum_lqg.plant import load_plant  # noqa: E402
+from pendulum_lqg.policy import OBSERVERS, DesignSpec, design_policy  # noqa: E402
+from pendulum_lqg.sim import Scenario, episode_seed, run_episodes  # noqa: E402
+
+pytestmark = pytest.mark.filterwarnings("error")
+
+ID = pendulum_lqg.ENV_ID
+
+#: check_env warnings that this env raises by design (Gymnasium's tests allow the same ones):
+#: unbounded observations (Gaussian noise, unbounded rates) and an action space in newtons.
+CHECK_ENV_ALLOWED = {
+    "A Box observation space minimum value is -infinity. This is probably too low.",
+    "A Box observation space maximum value is infinity. This is probably too high.",
+    "For Box action spaces, we recommend using a symmetric and normalized space (range=[-1, 1] "
+    "or [0, 1]). See https://stable-baselines3.readthedocs.io/en/master/guide/rl_tips.html for "
+    "more information.",
+}
+
+
+def _warn_text(w: warnings.WarningMessage) -> str:
+    return str(w.message).removeprefix("\x1b[33mWARN: ").removesuffix("\x1b[0m")
+
+
+def _gl_in_process() -> bool:
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")          # glfw warns before it fails headless
+            with mujoco.Renderer(load_plant().model, 8, 8):
+                return True
+    except Exception:
+        return False
+
+
+GL = _gl_in_process()
+
+
+def rollout(env: gym.Env, seed: int, actions: np.ndarray) -> dict[str, list]:
+    obs, info = env.reset(seed=seed)
+    out: dict[str, list] = {"obs": [obs], "reward": [], "term": [], "trunc": [], "info": [info]}
+    for a in actions:
+        obs, r, term, trunc, info = env.step(a)
+        for key, val in zip(("obs", "reward", "term", "trunc", "info"), (obs, r, term, trunc, info),
+                            strict=True):
+            out[key].append(val)
+        if term or trunc:
+            break
+    return out
+
+
+def assert_rollouts_equal(a: dict[str, list], b: dict[str, list]) -> None:
+    assert len(a["obs"]) == len(b["obs"])
+    np.testing.assert_array_equal(np.array(a["obs"]), np.array(b["obs"]))
+    assert a["reward"] == b["reward"] and a["term"] == b["term"] and a["trunc"] == b["trunc"]
+    for ia, ib in zip(a["info"], b["info"], strict=True):
+        assert ia.keys() == ib.keys()
+        for key in ia:
+            np.testing.assert_array_equal(ia[key], ib[key])
+
+
+# ---- registration ---------------------------------------------------------------------------------
+def test_registered_with_episode_length_from_the_env_defaults():
+    spec = gym.spec(ID)
+    env = gym.make(ID)
+    base = env.unwrapped
+    assert isinstance(base, CartPoleLQGEnv)
+    assert spec.max_episode_steps == base.max_episode_steps == Scenario().n_periods == 1000
+    assert spec.kwargs == {"duration": Scenario().duration,
+                           "control_period": Scenario().control_period}
+    assert spec.vector_entry_point == "pendulum_lqg.env:CartPoleLQGVectorEnv"
+    # a shorter episode truncates itself at its own duration
+    short = gym.make(ID, duration=0.05, noise_scale=0.0)
+    short.reset(seed=0)
+    truncs = [short.step(np.zeros(1))[3] for _ in range(5)]
+    assert truncs == [False] * 4 + [True]
+
+
+def test_registration_is_lazy_and_module_form_needs_no_import():
+    code = textwrap.dedent("""
+        import sys
+        import pendulum_lqg
+        assert "gymnasium" not in sys.modules and "mujoco" not in sys.modules
+        import gymnasium as gym
+        assert pendulum_lqg.ENV_ID in gym.registry
+        import importlib.resources
+        assert (importlib.resources.files("gymnasium") / "envs").is_dir()
+        print("lazy ok")
+    """)
+    module_form = textwrap.dedent("""
+        import gymnasium as gym
+        env = gym.make("pendulum_lqg:pendulum_lqg/CartPoleLQG-v0")
+        print(type(env.unwrapped).__name__, env.spec.max_episode_steps)
+    """)
+    for src, expected in ((code, "lazy ok"), (module_form, "CartPoleLQGEnv 1000")):
+        out = subprocess.run([sys.executable, "-c", src], capture_output=True, text=True,
+                             timeout=120, check=True)
+        assert out.stdout.strip() == expected, out.stderr
+
+
+# ---- gymnasium conformance -----------------------------------------------------------------------
+@pytest.mark.parametrize("mode", ["measurement", "state"])
+def test_check_env_passes_with_only_the_allowed_warnings(mode):
+    env = gym.make(ID, observation_mode=mode, disable_env_checker=True).unwrapped
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env, skip_render_check=not GL)
+    texts = {_warn_text(w) for w in caught}
+    unexpected = texts - CHECK_ENV_ALLOWED
+    assert not unexpected, f"unexpected warnings: {unexpected}"
+    assert texts == CHECK_ENV_ALLOWED          # the allow-list is exactly what the env raises
+    env.close()
+
+
+def test_spaces_come_from_the_model():
+    env = gym.make(ID).unwrapped
+    assert env.action_space == gym.spaces.Box(-10.0, 10.0, (1,), np.float32)   # ctrlrange·gear
+    assert env.observation_space.shape == (2,) and env.observation_space.dtype == np.float64
+    assert gym.make(ID, observation_mode="state").observation_space.shape == (4,)
+    assert env.dt == pytest.approx(0.01) and env.frame_skip == 10
+    assert env.metadata["render_fps"] == 100
+    assert gym.make(ID, control_period=0.02).unwrapped.frame_skip == 20
+
+
+def test_same_seed_gives_exactly_equal_rollouts_and_other_seeds_differ():
+    actions = np.random.default_rng(7).uniform(-3, 3, size=(200, 1))
+    a = rollout(gym.make(ID, x0_std=(0.05, 0.05, 0.0, 0.0)), 42, actions)
+    b = rollout(gym.make(ID, x0_std=(0.05, 0.05, 0.0, 0.0)), 42, actions)
+    assert_rollouts_equal(a, b)
+    assert len(a["reward"]) > 20
+    c = rollout(gym.make(ID, x0_std=(0.05, 0.05, 0.0, 0.0)), 43, actions)
+    assert not np.array_equal(a["obs"][0], c["obs"][0])
+
+
+def test_env_pickles_mid_episode_and_continues_identically():
+    env = gym.make(ID)
+    agent = LQGAgent(env)
+    obs, _ = env.reset(seed=3)
+    agent.reset()
+    for _ in range(300):                      # past one 256-period noise block
+        obs = env.step(agent.act(obs))[0]
+    clone = pickle.loads(pickle.dumps(env))
+    agent2 = pickle.loads(pickle.dumps(agent))
+    for _ in range(300):
+        step_a = env.step(agent.act(obs))
+        step_b = clone.step(agent2.act(obs))
+        np.testing.assert_array_equal(step_a[0], step_b[0])
+        assert step_a[1:4] == step_b[1:4]
+        assert step_a[4]["running_cost"] == step_b[4]["running_cost"]
+        obs = step_a[0]
+    # a fresh reset with a seed is the same too
+    np.testing.assert_array_equal(env.reset(seed=5)[0], clone.reset(seed=5)[0])
+
+
+# ---- reward, info, episode end ---------------------------------------------------------------------
+def test_reward_is_exp_of_the_step_cost_and_zero_on_failure():
+    env = gym.make(ID, reward_scale=5.0)
+    obs, info = env.reset(seed=1)
+    assert info["cost"] == 0.0 and info["running_cost"] == 0.0 and info["failure_reason"] == ""
+    np.testing.assert_array_equal(info["y_true"], [0.0, 0.1])
+    total, rewards = 0.0, []
+    while True:
+        obs, r, term, trunc, info = env.step(np.array([10.0], dtype=np.float32))   # full push
+        total += info["cost"]
+        rewards.append(r)
+        if term or trunc:
+            break
+    assert term and not trunc
+    assert info["failure_reason"] in ("pole_fell", "track_limit")
+    assert rewards[-1] == 0.0
+    assert all(0.0 < r <= 1.0 for r in rewards[:-1])
+    assert info["running_cost"] == pytest.approx(total, rel=1e-12)
+    np.testing.assert_array_equal(obs, info["state"][:2])          # noise-free after failure
+    with pytest.raises(PendulumLQGError, match=r"^step:"):
+        env.unwrapped.step(np.zeros(1))
+    # a surviving step: r = exp(-c / (scale·T))
+    env.reset(seed=1)
+    _, r, _, _, info = env.step(np.zeros(1))
+    assert r == pytest.approx(np.exp(-info["cost"] / (5.0 * 0.01)), rel=1e-15)
+
+
+@pytest.mark.parametrize(("kwargs", "param"), [
+    ({"observation_mode": "pixels"}, "observation_mode"),
+    ({"control_period": 0.0105}, "control_period"),
+    ({"duration": -1.0}, "duration"),
+    ({"noise_scale": -1.0}, "noise_scale"),
+    ({"process_noise": "wind"}, "process_noise"),
+    ({"process_noise": "force"}, "process_density"),
+    ({"measurement_variance": [1.0, 2.0, 3.0]}, "measurement_variance"),
+    ({"x0": (0.0, 0.1)}, "x0"),
+    ({"theta_max": 0.0}, "theta_max"),
+    ({"reward_scale": 0.0}, "reward_scale"),
+    ({"model_overrides": {"pole_weight": 1.0}}, "model override"),
+    ({"model_overrides": {"pole_mass": -1.0}}, "pole_mass"),
+    ({"width": 4000}, "width"),
+    ({"render_mode": "human"}, "render_mode"),
+])
+def test_bad_keywords_raise_config_errors_naming_the_parameter(kwargs, param):
+    with pytest.raises(ConfigError, match=rf"^{param}"):
+        CartPoleLQGEnv(**kwargs)
+
+
+def test_bad_reset_options_and_actions_are_errors():
+    env = CartPoleLQGEnv()
+    with pytest.raises(ConfigError, match=r"^options"):
+        env.reset(seed=0, options={"x0": [0, 0, 0, 0]})
+    env.reset(seed=0)
+    with pytest.raises(PendulumLQGError, match=r"^action"):
+        env.step(np.zeros(2))
+    with pytest.raises(PendulumLQGError, match=r"^action"):
+        env.step(np.array([np.nan]))
+    with pytest.raises(ConfigError, match=r"^num_envs"):
+        CartPoleLQGVectorEnv(0)
+
+
+# ---- the LQG agent ---------------------------------------------------------------------------------
+def _agent_episodes(env: gym.Env, agent: LQGAgent, seed: int, episodes: range,
+                    ) -> list[tuple[bool, float, str]]:
+    out = []
+    for k in episodes:
+        obs, _ = env.reset(seed=episode_seed(seed, k))
+        agent.reset()
+        term = trunc = False
+        while not (term or trunc):
+            obs, _, term, trunc, info = env.step(agent.act(obs))
+        out.append((not term, info["running_cost"], info["failure_reason"]))
+    return out
+
+
+@pytest.mark.parametrize(("observer", "episodes", "kwargs"), [
+    ("kalman", 20, {}),
+    ("none", 3, {"observation_mode": "state"}),
+    ("luenberger", 3, {}),
+    ("kalman-predictor", 3, {}),
+    ("kalman-tv", 3, {}),
+    ("kalman-bucy", 3, {}),
+    # a non-default problem: force noise, a random x0, a mismatched plant, other weights
+    ("kalman", 4, {"process_noise": "force", "process_density": [0.02, 0.002],
+                   "x0_std": (0.05, 0.02, 0.0, 0.0), "model_overrides": {"pole_mass_scale": 1.3},
+                   "cost_Q": (2.0, 1.0, 0.5, 0.1), "cost_R": 0.5, "duration": 4.0}),
+])
+def test_agent_through_env_equals_run_episodes_exactly(observer, episodes, kwargs):
+    assert set(OBSERVERS) >= {observer}
+    env = gym.make(ID, **kwargs)
+    agent = LQGAgent(env, observer=observer)
+    got = _agent_episodes(env, agent, seed=11, episodes=range(episodes))
+    base = env.unwrapped
+    policy = design_policy(load_plant(), base.scenario.control_period, base.scenario.noise,
+                           DesignSpec(observer=observer))            # what bench designs
+    rows = run_episodes(base.plant, base.scenario, policy, seed=11, episodes=range(episodes)).rows
+    want = [(r["success"], r["cost"], r["failure_reason"]) for r in rows]
+    assert got == want                                                # bit for bit
+    if observer == "luenberger":                                      # failures are covered too
+        assert not all(s for s, _, _ in got)
+
+
+def test_agent_stabilises_99_percent_and_matches_bench_summary():
+    """200 seeded lecture episodes, DLQR + Kalman, through the (native vector) env API."""
+    n, seed = 200, 2024
+    envs = gym.make_vec(ID, num_envs=n)
+    agent = LQGAgent(envs, observer="kalman")
+    obs, _ = envs.reset(seed=[episode_seed(seed, k) for k in range(n)])
+    agent.reset()
+    done = np.zeros(n, dtype=bool)
+    success = np.zeros(n, dtype=bool)
+    cost = np.zeros(n)
+    while not done.all():
+        obs, _, term, trunc, info = envs.step(agent.act(obs))
+        ended = (term | trunc) & ~done
+        success[ended] = ~term[ended]
+        cost[ended] = info["final_info"]["running_cost"][ended] if ended.any() else 0.0
+        done |= ended
+        agent.reset(np.nonzero(term | trunc)[0])
+    assert success.mean() >= 0.99
+    base = envs.unwrapped
+    policy = design_policy(load_plant(), base.scenario.control_period, base.scenario.noise)
+    summary = summarize(run_episodes(base.plant, base.scenario, policy, seed=seed,
+                                     episodes=range(n)).rows)
+    assert summary["success_rate"] == success.mean()
+    assert summary["cost"]["mean"] == pytest.approx(cost[success].mean(), rel=1e-12)
+
+
+def test_agent_refuses_an_observation_mode_it_cannot_use():
+    with pytest.raises(ConfigError, match=r"^observer: 'none' needs observation_mode='state'"):
+        LQGAgent(gym.make(ID), observer="none")
+    with pytest.raises(ConfigError, match=r"^observer: 'kalman' needs"):
+        LQGAgent(gym.make(ID, observation_mode="state"), observer="kalman")
+    with pytest.raises(ConfigError, match=r"^env"):
+        LQGAgent(gym.make("CartPole-v1"))
+
+
+# ---- vector envs -----------------------------------------------------------------------------------
+def _vector_run(envs: gym.vector.VectorEnv, seed: object, actions: np.ndarray) -> list[tuple]:
+    out = [envs.reset(seed=seed)]
+    for a in actions:
+        out.append(envs.step(a))
+    return out
+
+
+@pytest.mark.parametrize("kwargs", [
+    {"observation_mode": "measurement"},
+    {"observation_mode": "state", "max_episode_steps": 17},
+])
+def test_native_vector_env_equals_single_envs(kwargs):
+    """Same seeds → the same episodes as SyncVectorEnv over single envs, through failures,
+    truncations and SAME_STEP autoresets."""
+    n = 5
+    cfg = {"duration": 0.4, "x0_std": (0.5, 0.25, 0.5, 0.5), **kwargs}
+    steps = kwargs.get("max_episode_steps")
+    native = gym.make_vec(ID, num_envs=n, **cfg)
+    assert isinstance(native.unwrapped, CartPoleLQGVectorEnv)
+    sync = gym.make_vec(ID, num_envs=n, vectorization_mode="sync",
+                        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP},
+                        **cfg)
+    if steps is not None:   # the sync sub-envs get their TimeLimit from make's keyword
+        sync = gym.make_vec(ID, num_envs=n, vectorization_mode="sync", max_episode_steps=steps,
+                            vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP},
+                            **{k: v for k, v in cfg.items() if k != "max_episode_steps"})
+    actions = np.random.default_rng(0).uniform(-10, 10, size=(90, n, 1))
+    a = _vector_run(native, 100, actions)
+    b = _vector_run(sync, 100, actions)
+    ended = 0
+    for sa, sb in zip(a, b, strict=True):
+        np.testing.assert_array_equal(sa[0], sb[0])                     # observations
+        for x, y in zip(sa[1:-1], sb[1:-1], strict=True):               # reward, term, trunc
+            np.testing.assert_array_equal(x, y)
+        ia, ib = sa[-1], sb[-1]
+        for key in ("cost", "running_cost", "state", "y_true", "failure_reason", "time"):
+            np.testing.assert_array_equal(ia[key], ib[key])
+        if "final_obs" in ib:
+            ended += int(ib["_final_obs"].sum())
+            np.testing.assert_array_equal(ia["_final_obs"], ib["_final_obs"])
+            for r in np.nonzero(ib["_final_obs"])[0]:
+                np.testing.assert_array_equal(ia["final_obs"][r], ib["final_obs"][r])
+                assert ia["final_info"]["running_cost"][r] == ib["final_info"]["running_cost"][r]
+    assert ended >= 2 * n            # several failures/truncations and autoresets happened
+    terms = np.array([s[2] for s in a[1:]])
+    truncs = np.array([s[3] for s in a[1:]])
+    assert terms.any() and truncs.any()
+
+
+def test_native_vector_env_seed_list_equals_single_env_resets():
+    seeds = [5, 9, 2]
+    envs = gym.make_vec(ID, num_envs=3, x0_std=(0.1, 0.1, 0.0, 0.0))
+    obs, info = envs.reset(seed=seeds)
+    for i, s in enumerate(seeds):
+        single_obs, single_info = gym.make(ID, x0_std=(0.1, 0.1, 0.0, 0.0)).reset(seed=s)
+        np.testing.assert_array_equal(obs[i], single_obs)
+        np.testing.assert_array_equal(info["state"][i], single_info["state"])
+    with pytest.raises(ConfigError, match=r"^seed"):
+        envs.reset(seed=[1, 2])
+    assert envs.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+
+
+# ---- rendering -------------------------------------------------------------------------------------
+_RENDER_SCRIPT = textwrap.dedent("""
+    import numpy as np, gymnasium as gym, mujoco, pendulum_lqg
+    from pendulum_lqg.plant import load_plant
+    try:
+        mujoco.Renderer(load_plant().model, 8, 8).close()
+    except Exception as exc:
+        print("NO_GL", type(exc).__name__); raise SystemExit(0)
+    env = gym.make(pendulum_lqg.ENV_ID, render_mode="rgb_array", x0=(0.0, 0.4, 0.0, 0.0))
+    env.reset(seed=0)
+    a = env.render()
+    env2 = gym.make(pendulum_lqg.ENV_ID, render_mode="rgb_array", x0=(1.0, -0.4, 0.0, 0.0))
+    env2.reset(seed=0)
+    b = env2.render()
+    np.save("{path}", np.stack([a, b]))
+    print("OK")
+""")
+
+
+def _frames(tmp_path) -> np.ndarray:
+    if GL:
+        pair = []
+        for x0 in ((0.0, 0.4, 0.0, 0.0), (1.0, -0.4, 0.0, 0.0)):
+            env = gym.make(ID, render_mode="rgb_array", x0=x0)
+            env.reset(seed=0)
+            pair.append(env.render())
+            env.close()
+        return np.stack(pair)
+    if _GL_CHOSEN_HERE:
+        pytest.skip("mujoco.Renderer cannot be created (no OpenGL platform)")
+    path = tmp_path / "frames.npy"
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    out = subprocess.run([sys.executable, "-c", _RENDER_SCRIPT.replace("{path}", str(path))],
+                         capture_output=True, text=True, timeout=120, env=env, check=True)
+    if out.stdout.startswith("NO_GL"):
+        pytest.skip(f"mujoco.Renderer cannot be created: {out.stdout.strip()}")
+    return np.load(path)
+
+
+def test_render_rgb_array_frames_cart_and_pole(tmp_path):
+    frames = _frames(tmp_path)
+    assert frames.shape == (2, 480, 640, 3) and frames.dtype == np.uint8
+    for f in frames:
+        assert f.std() > 10                                  # not blank
+    assert np.abs(frames[0].astype(int) - frames[1]).mean() > 1   # the state is what is drawn
+    # the pole (orange, rgba 0.9 0.55 0.15) is in view
+    orange = (frames[..., 0] > 150) & (frames[..., 1] > 70) & (frames[..., 1] < 170) \
+        & (frames[..., 2] < 90)
+    assert orange[0].sum() > 50 and orange[1].sum() > 50
+
+
+def test_render_without_mode_warns_and_returns_none():
+    env = CartPoleLQGEnv()
+    env.reset(seed=0)
+    with pytest.warns(UserWarning, match="render_mode"):
+        assert env.render() is None
