@@ -216,9 +216,13 @@ def _crossings(loop: control.StateSpace, omega: np.ndarray, Lw: np.ndarray,
         re = Lw[k].real + t * (Lw[k + 1].real - Lw[k].real)
         if re < 0:
             gms.append(-1.0 / re)
-    if loop.isdtime(strict=True):
-        z = complex(np.asarray(control.evalfr(loop, -1.0)).reshape(-1)[0])
-        if z.real < 0 and abs(z.imag) < 1e-9 * max(1.0, abs(z)):
+    ends = (1.0, -1.0) if loop.isdtime(strict=True) else (0.0,)   # ω = 0 (and π/T): L is real
+    A = np.asarray(loop.A, dtype=float)
+    for s in ends:
+        if A.size and np.min(np.abs(np.linalg.eigvals(A) - s)) < 1e-9:
+            continue                                                # a pole there: L infinite
+        z = complex(np.asarray(control.evalfr(loop, s)).reshape(-1)[0])
+        if z.real < 0:
             gms.append(-1.0 / z.real)
     g = np.asarray(gms)
     upper = float(np.min(g[g > 1])) if np.any(g > 1) else float("inf")
@@ -251,8 +255,8 @@ def loop_margins(loop: control.StateSpace, omega: ArrayLike) -> MarginReport:
     r"""Classical and disk margins of a SISO loop gain on the frequency grid ``omega``.
 
     Gain and phase margins come from the crossings of the Nyquist curve on the grid (linear
-    interpolation between neighbouring points; for a discrete loop the Nyquist frequency ``π/T``,
-    where ``L`` is real, is checked too); the return difference
+    interpolation between neighbouring points; ``ω = 0`` and, for a discrete loop, the Nyquist
+    frequency ``π/T``, where ``L`` is real, are checked too); the return difference
     :math:`\min_\omega |1 + L(j\omega)|` and the balanced disk margin
     (Seiler, Packard & Gahinet 2020, python-control ``disk_margins``) are evaluated on ``omega``.
 

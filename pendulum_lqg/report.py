@@ -1,0 +1,445 @@
+"""``pendulum-lqg report RESULTS…``: a Markdown report with PNG figures, made from results folders.
+
+The report is made from the data files only (``spec.json``, ``episodes.csv``, ``summary.json`` and
+the studies' CSV files), never by re-running anything. What a folder gets depends on what it holds:
+
+=====================  =========================================================================
+results of             figures
+=====================  =========================================================================
+a grid over            success rate vs that variable with 95 % Wilson bands (one line per policy,
+``noise_scale`` /      panels per value of any other swept variable); RMS estimation error per
+``control_period`` /   state; cost distributions (successful episodes)
+``theta0``
+a mismatch grid        success and mean cost along pole mass and pole length (the other at ×1),
+(``pole_*_scale``)     and the success over the whole (mass, length) grid per policy
+``study = "margins"``  Nyquist plots of LQ vs LQG (and LTR) loops with the circle abs(1 + L) = 1;
+                       LTR margins vs q; sampled-loop margins vs T
+``study = "roa"``      noise-free recovery maps over (θ₀, θ̇₀); largest θ₀ per policy
+=====================  =========================================================================
+
+matplotlib (Agg backend) is imported only when a report is made.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.metrics import wilson_interval
+
+SWEEP_KEYS = ("noise_scale", "control_period", "theta0", "pole_mass_scale", "pole_length_scale",
+              "cart_mass_scale", "duration")
+SERIES_KEYS = ("policy", "controller", "observer", "discretization", "estimate0")
+LOG_KEYS = ("noise_scale",)
+LABELS = {"noise_scale": "noise scale (× lecture std)", "control_period": "control period T [s]",
+          "theta0": "θ₀ [rad]", "pole_mass_scale": "pole mass × nominal",
+          "pole_length_scale": "pole length × nominal", "cart_mass_scale": "cart mass × nominal",
+          "duration": "duration [s]"}
+EST_STATES = (("rms_est_err_p", "p [m]"), ("rms_est_err_theta", "θ [rad]"),
+              ("rms_est_err_p_dot", "ṗ [m/s]"), ("rms_est_err_theta_dot", "θ̇ [rad/s]"))
+
+
+def _plt() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.rcParams.update({"figure.dpi": 110, "font.size": 9, "axes.grid": True,
+                         "grid.alpha": 0.3, "legend.fontsize": 8})
+    return plt
+
+
+def _results_folders(paths: list[Path], out: Path) -> list[Path]:
+    found: list[Path] = []
+    for p in paths:
+        if (p / "spec.json").is_file():
+            found.append(p)
+            continue
+        subs = sorted(q for q in p.glob("*/spec.json")) if p.is_dir() else []
+        subs = [q.parent for q in subs if q.parent.resolve() != out.resolve()]
+        if not subs:
+            raise ConfigError(f"results: {p} is not a results folder (no spec.json) and holds none")
+        found += subs
+    return found
+
+
+def make_report(paths: list[Path], out: Path) -> Path:
+    """Write ``out/report.md`` and ``out/*.png`` for the results folders ``paths``.
+
+    Each path is a results folder (with ``spec.json``) or a folder of them. Returns the report path.
+    """
+    folders = _results_folders([Path(p) for p in paths], Path(out))
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    plt = _plt()
+    sections = ["# pendulum_lqg report", "",
+                "Made by `pendulum-lqg report` from the data files of: "
+                + ", ".join(f"`{f}`" for f in folders) + ".", ""]
+    for folder in folders:
+        spec = json.loads((folder / "spec.json").read_text())
+        src = spec.get("spec", {})
+        name = spec.get("name", folder.name)
+        sections += [f"## {name}", "", str(src.get("description", "")), "",
+                     f"Seed {src.get('seed', 0)}; data: `{folder}`.", ""]
+        if not (folder / "summary.md").is_file():
+            sections += ["*(incomplete: no summary.md — finish the run with `--resume`)*", ""]
+            continue
+        study = src.get("study")
+        if study == "margins":
+            figs = _margins_figures(folder, out, name, plt)
+        elif study == "roa":
+            figs = _roa_figures(folder, out, name, plt)
+        else:
+            figs = _grid_figures(folder, out, name, src, plt)
+        for title, fname in figs:
+            sections += [f"### {title}", "", f"![{title}]({fname})", ""]
+        sections += ["<details><summary>table</summary>", "",
+                     (folder / "summary.md").read_text(), "</details>", ""]
+    from pendulum_lqg.results import atomic_write
+
+    report = out / "report.md"
+    atomic_write(report, "\n".join(sections))
+    return report
+
+
+def _save(fig: Any, out: Path, fname: str, plt: Any) -> str:
+    fig.tight_layout()
+    fig.savefig(out / fname)
+    plt.close(fig)
+    return fname
+
+
+# ---- grids ---------------------------------------------------------------------------------------
+def _read_rows(folder: Path) -> list[dict[str, object]]:
+    from pendulum_lqg.results import read_csv
+
+    path = folder / "episodes.csv"
+    if not path.is_file():
+        raise ConfigError(f"results: {folder} has no episodes.csv")
+    return read_csv(path)
+
+
+def _series_label(row: dict[str, object], keys: list[str]) -> str:
+    return " ".join(str(row[k]) for k in keys)
+
+
+def _group(rows: list[dict[str, object]], keys: list[str]) -> dict[tuple, list[dict[str, object]]]:
+    out: dict[tuple, list[dict[str, object]]] = {}
+    for r in rows:
+        out.setdefault(tuple(r[k] for k in keys), []).append(r)
+    return out
+
+
+def _success_curve(rows: list[dict[str, object]], x: str) -> tuple[np.ndarray, ...]:
+    by_x = _group(rows, [x])
+    xs = np.array(sorted(k[0] for k in by_x), dtype=float)
+    rate, lo, hi = [], [], []
+    for xv in xs:
+        grp = by_x[(xv,)] if (xv,) in by_x else by_x[(int(xv),)]
+        s = sum(bool(r["success"]) for r in grp)
+        a, b = wilson_interval(s, len(grp))
+        rate.append(s / len(grp))
+        lo.append(a)
+        hi.append(b)
+    return xs, np.array(rate), np.array(lo), np.array(hi)
+
+
+def _metric_curve(rows: list[dict[str, object]], x: str, metric: str, *, successes_only: bool,
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    by_x = _group(rows, [x])
+    xs = np.array(sorted(k[0] for k in by_x), dtype=float)
+    mean, se = [], []
+    for xv in xs:
+        grp = by_x.get((xv,)) or by_x[(int(xv),)]
+        vals = np.array([float(r[metric]) for r in grp  # type: ignore[arg-type]
+                         if not successes_only or bool(r["success"])])
+        vals = vals[np.isfinite(vals)]
+        mean.append(vals.mean() if vals.size else np.nan)
+        se.append(vals.std(ddof=1) / math.sqrt(vals.size) if vals.size > 1 else 0.0)
+    return xs, np.array(mean), np.array(se)
+
+
+def _grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: Any,
+                  ) -> list[tuple[str, str]]:
+    rows = _read_rows(folder)
+    grid = src.get("grid", {})
+    varying = [k for k, v in grid.items() if isinstance(v, list) and len(v) > 1]
+    sweeps = [k for k in SWEEP_KEYS if k in varying]
+    series = [k for k in SERIES_KEYS if k in varying] or ["config"]
+    figs: list[tuple[str, str]] = []
+    if {"pole_mass_scale", "pole_length_scale"} <= set(sweeps):
+        return _mismatch_figures(rows, out, name, series, plt)
+    if not sweeps:
+        figs.append(("cost distributions", _cost_boxes(rows, out, name, series, None, plt)))
+        return figs
+    x = max(sweeps, key=lambda k: len(grid[k]))
+    facets = [k for k in sweeps if k != x]
+    facet_vals = sorted({tuple(r[k] for k in facets) for r in rows})
+    fig, axes = plt.subplots(1, len(facet_vals), figsize=(5.2 * len(facet_vals), 3.8),
+                             squeeze=False, sharey=True)
+    for ax, fv in zip(axes[0], facet_vals, strict=True):
+        sub = [r for r in rows if tuple(r[k] for k in facets) == fv]
+        for key, grp in sorted(_group(sub, series).items()):
+            xs, rate, lo, hi = _success_curve(grp, x)
+            line, = ax.plot(xs, rate, marker="o", ms=3, label=" ".join(map(str, key)))
+            ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15, lw=0)
+        ax.set_xlabel(LABELS.get(x, x))
+        ax.set_ylim(-0.03, 1.03)
+        if x in LOG_KEYS:
+            ax.set_xscale("log")
+        if facets:
+            ax.set_title(", ".join(f"{k} = {v}" for k, v in zip(facets, fv, strict=True)))
+    axes[0][0].set_ylabel("success rate (95 % Wilson band)")
+    axes[0][-1].legend(loc="best")
+    fig.suptitle(f"{name}: success rate vs {x}")
+    figs.append((f"success rate vs {x}", _save(fig, out, f"{name}_success_vs_{x}.png", plt)))
+
+    if x == "control_period":
+        fig, axes = plt.subplots(1, len(facet_vals), figsize=(5.2 * len(facet_vals), 3.8),
+                                 squeeze=False)
+        for ax, fv in zip(axes[0], facet_vals, strict=True):
+            sub = [r for r in rows if tuple(r[k] for k in facets) == fv]
+            for key, grp in sorted(_group(sub, series).items()):
+                xs, m, _ = _metric_curve(grp, x, "cost", successes_only=True)
+                ax.plot(xs, m, marker="o", ms=3, label=" ".join(map(str, key)))
+            ax.set_yscale("log")
+            ax.set_xlabel(LABELS[x])
+            ax.set_title(", ".join(f"{k} = {v}" for k, v in zip(facets, fv, strict=True)))
+        axes[0][0].set_ylabel("mean cost J of successful episodes")
+        axes[0][-1].legend(loc="best")
+        fig.suptitle(f"{name}: cost vs control period")
+        figs.append(("cost vs control period", _save(fig, out, f"{name}_cost_vs_T.png", plt)))
+
+    has_est = any(np.isfinite(float(r["rms_est_err_theta"])) and float(r["rms_est_err_theta"]) > 0
+                  for r in rows)  # type: ignore[arg-type]
+    if has_est and x == "noise_scale":
+        fig, axes = plt.subplots(1, 4, figsize=(15, 3.6))
+        for ax, (metric, label) in zip(axes, EST_STATES, strict=True):
+            for key, grp in sorted(_group(rows, series).items()):
+                xs, m, se = _metric_curve(grp, x, metric, successes_only=False)
+                if not np.any(m > 0):
+                    continue          # true-state policies have no estimation error
+                ax.errorbar(xs, m, yerr=se, marker="o", ms=3, capsize=2,
+                            label=" ".join(map(str, key)))
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel(LABELS[x])
+            ax.set_title(f"RMS estimation error, {label}")
+        axes[-1].legend(loc="best")
+        fig.suptitle(f"{name}: estimation error per state (all episodes, mean ± SE)")
+        figs.append(("estimation error per state",
+                     _save(fig, out, f"{name}_estimation_error.png", plt)))
+    nominal = 1.0 if x == "noise_scale" else None
+    figs.append(("cost distributions", _cost_boxes(rows, out, name, series, (x, nominal), plt)))
+    return figs
+
+
+def _cost_boxes(rows: list[dict[str, object]], out: Path, name: str, series: list[str],
+                at: tuple[str, float | None] | None, plt: Any) -> str:
+    """Box plots of the cost of successful episodes per series (per x value when there are few)."""
+    groups = _group(rows, series)
+    if at is not None:
+        xk, xv = at
+        xs = sorted({float(r[xk]) for r in rows})  # type: ignore[arg-type]
+        if xv is None or xv not in xs:
+            xs = xs if len(xs) <= 4 else [xs[0], xs[len(xs) // 2], xs[-1]]
+        else:
+            xs = [xv]
+    else:
+        xk, xs = "", [None]
+    fig, axes = plt.subplots(1, len(xs), figsize=(max(5.0, 1.1 * len(groups)) * len(xs) ** 0.7,
+                                                  3.8), squeeze=False, sharey=True)
+    for ax, xv in zip(axes[0], xs, strict=True):
+        data, labels = [], []
+        for key, grp in sorted(groups.items()):
+            c = [float(r["cost"]) for r in grp  # type: ignore[arg-type]
+                 if bool(r["success"]) and (xv is None or float(r[xk]) == xv)]  # type: ignore[arg-type]
+            data.append(c if c else [np.nan])
+            labels.append("\n".join(map(str, key)))
+        ax.boxplot(data, showfliers=True, flierprops={"ms": 2})
+        ax.set_xticks(range(1, len(labels) + 1), labels, rotation=30, ha="right", fontsize=7)
+        ax.set_yscale("log")
+        if xv is not None:
+            ax.set_title(f"{xk} = {xv:g}")
+    axes[0][0].set_ylabel("cost J (successful episodes)")
+    fig.suptitle(f"{name}: cost distributions")
+    return _save(fig, out, f"{name}_cost_distribution.png", plt)
+
+
+def _mismatch_figures(rows: list[dict[str, object]], out: Path, name: str, series: list[str],
+                      plt: Any) -> list[tuple[str, str]]:
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7))
+    for col, (x, other) in enumerate((("pole_mass_scale", "pole_length_scale"),
+                                      ("pole_length_scale", "pole_mass_scale"))):
+        sub = [r for r in rows if float(r[other]) == 1.0]  # type: ignore[arg-type]
+        for key, grp in sorted(_group(sub, series).items()):
+            xs, rate, lo, hi = _success_curve(grp, x)
+            line, = axes[0][col].plot(xs, rate, marker="o", ms=3, label=" ".join(map(str, key)))
+            axes[0][col].fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15, lw=0)
+            xs, m, se = _metric_curve(grp, x, "cost", successes_only=True)
+            axes[1][col].errorbar(xs, m, yerr=se, marker="o", ms=3, capsize=2,
+                                  color=line.get_color())
+        for ax in axes[:, col]:
+            ax.set_xscale("log", base=2)
+            ax.set_xlabel(f"{LABELS[x]} ({other} = 1)")
+        axes[0][col].set_ylim(-0.03, 1.03)
+        axes[1][col].set_yscale("log")
+    axes[0][0].set_ylabel("success rate (95 % Wilson band)")
+    axes[1][0].set_ylabel("mean cost J (successful episodes)")
+    axes[0][1].legend(loc="best")
+    fig.suptitle(f"{name}: the simulated pole differs from the design model")
+    figs = [("mismatch curves", _save(fig, out, f"{name}_curves.png", plt))]
+
+    groups = sorted(_group(rows, series).items())
+    ms = sorted({float(r["pole_mass_scale"]) for r in rows})  # type: ignore[arg-type]
+    ls = sorted({float(r["pole_length_scale"]) for r in rows})  # type: ignore[arg-type]
+    fig, axes = plt.subplots(1, len(groups), figsize=(3.3 * len(groups), 3.4), squeeze=False)
+    for ax, (key, grp) in zip(axes[0], groups, strict=True):
+        Z = np.full((len(ls), len(ms)), np.nan)
+        for (m, ln), cell in _group(grp, ["pole_mass_scale", "pole_length_scale"]).items():
+            Z[ls.index(float(ln)), ms.index(float(m))] = np.mean([bool(r["success"]) for r in cell])
+        im = ax.imshow(Z, origin="lower", vmin=0, vmax=1, cmap="RdYlGn", aspect="auto")
+        ax.set_xticks(range(len(ms)), [f"{v:g}" for v in ms])
+        ax.set_yticks(range(len(ls)), [f"{v:g}" for v in ls])
+        ax.set_xlabel("pole mass ×")
+        ax.set_title(" ".join(map(str, key)), fontsize=8)
+        ax.grid(False)
+        for i in range(len(ls)):
+            for j in range(len(ms)):
+                ax.text(j, i, f"{Z[i, j]:.0%}", ha="center", va="center", fontsize=6)
+    axes[0][0].set_ylabel("pole length ×")
+    fig.colorbar(im, ax=axes[0].tolist(), shrink=0.8, label="success rate")
+    fig.suptitle(f"{name}: success over pole mass × length")
+    fig.savefig(out / f"{name}_success_grid.png", bbox_inches="tight")
+    plt.close(fig)
+    figs.append(("success over pole mass × length", f"{name}_success_grid.png"))
+    return figs
+
+
+# ---- margins -------------------------------------------------------------------------------------
+def _margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[str, str]]:
+    from pendulum_lqg.results import read_csv
+
+    nyq = read_csv(folder / "nyquist.csv")
+    curves: dict[str, list[tuple[float, float]]] = {}
+    for r in nyq:
+        curves.setdefault(str(r["loop"]), []).append((float(r["re"]), float(r["im"])))  # type: ignore[arg-type]
+    t = np.linspace(0, 2 * np.pi, 400)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5))
+    cont = [k for k in curves if "continuous" in k or k.startswith("LTR")]
+    disc = [k for k in curves if k not in cont]
+    for ax, keys, title in ((axes[0], cont, "continuous loops (LTR: W = q²BBᵀ)"),
+                            (axes[1], disc, "sampled loops at T (plant = exact ZOH)")):
+        ax.plot(-1 + np.cos(t), np.sin(t), "k--", lw=1, label="abs(1 + L) = 1")
+        ax.plot([-1], [0], "k+", ms=10)
+        for k in keys:
+            z = np.array(curves[k])
+            style = {"lw": 2.2} if k.startswith("LQ (") else {"lw": 1.2}
+            line, = ax.plot(z[:, 0], z[:, 1], label=k, **style)
+            ax.plot(z[:, 0], -z[:, 1], color=line.get_color(), lw=0.6, alpha=0.5)
+        ax.set_xlim(-4, 2)
+        ax.set_ylim(-3, 3)
+        ax.set_aspect("equal")
+        ax.set_xlabel("Re L")
+        ax.set_ylabel("Im L")
+        ax.set_title(title)
+        ax.legend(loc="lower left", fontsize=7)
+    fig.suptitle(f"{name}: Nyquist plots at the plant input (ω > 0 bold, mirror thin)")
+    figs = [("Nyquist: LQ vs LQG", _save(fig, out, f"{name}_nyquist.png", plt))]
+
+    ltr = read_csv(folder / "ltr.csv")
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
+    for meas in sorted({str(r["measurement"]) for r in ltr}):
+        sub = [r for r in ltr if r["measurement"] == meas]
+        q = np.array([float(r["q"]) for r in sub])  # type: ignore[arg-type]
+        for ax, key in zip(axes, ("phase_margin_deg", "min_return_difference", "disk_margin"),
+                           strict=True):
+            ax.plot(q, [float(r[key]) for r in sub], marker="o", ms=3, label=meas)  # type: ignore[arg-type]
+    summ = json.loads((folder / "summary.json").read_text())
+    lq = next(r for r in summ["loops"] if r["loop"].startswith("LQ ("))
+    for ax, key, title in zip(axes, ("phase_margin_deg", "min_return_difference", "disk_margin"),
+                              ("phase margin [deg]", "min abs(1 + L(jω))", "disk margin α"),
+                              strict=True):
+        ax.axhline(float(lq[key]), color="k", ls="--", lw=1, label="LQ loop")
+        ax.set_xscale("log")
+        ax.set_xlabel("q (W = q²BBᵀ)")
+        ax.set_title(title)
+    axes[1].set_yscale("log")
+    axes[0].legend(loc="best")
+    fig.suptitle(f"{name}: loop transfer recovery")
+    figs.append(("loop transfer recovery", _save(fig, out, f"{name}_ltr.png", plt)))
+
+    loops = [r for r in summ["loops"] if float(r["control_period"]) > 0]
+    if loops:
+        fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
+        keyf = lambda r: (r["policy"], r.get("discretization", ""))  # noqa: E731
+        for key in sorted({keyf(r) for r in loops}):
+            sub = sorted((r for r in loops if keyf(r) == key), key=lambda r: r["control_period"])
+            T = [float(r["control_period"]) for r in sub]
+            for ax, m in zip(axes, ("phase_margin_deg", "disk_margin"), strict=True):
+                vals = [float(r[m]) if r["closed_loop_stable"] else np.nan for r in sub]
+                ax.plot(T, vals, marker="o", ms=3, label=" ".join(key))
+        for ax, title in zip(axes, ("phase margin [deg] (blank: unstable)", "disk margin α"),
+                             strict=True):
+            ax.set_xlabel("control period T [s]")
+            ax.set_title(title)
+        axes[1].legend(loc="best", fontsize=7)
+        fig.suptitle(f"{name}: margins of the sampled loops")
+        figs.append(("sampled-loop margins vs T", _save(fig, out, f"{name}_sampled.png", plt)))
+    return figs
+
+
+# ---- region of attraction ------------------------------------------------------------------------
+def _roa_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[str, str]]:
+    summ = json.loads((folder / "summary.json").read_text())
+    prm = summ["params"]
+    cfgs = summ["configurations"]
+    policies = list(dict.fromkeys(c["policy"] for c in cfgs))
+    est = list(dict.fromkeys(c["estimate0"] for c in cfgs))
+    t_lo, t_hi, _ = prm["map_theta"]
+    d_lo, d_hi, _ = prm["map_theta_dot"]
+    fig, axes = plt.subplots(len(est), len(policies), figsize=(3.0 * len(policies),
+                                                              2.8 * len(est)), squeeze=False)
+    for c in cfgs:
+        unit = json.loads((folder / "units" / f"c{c['index']:03d}.json").read_text()) \
+            if (folder / "units" / f"c{c['index']:03d}.json").is_file() else None
+        ax = axes[est.index(c["estimate0"])][policies.index(c["policy"])]
+        if unit is None:
+            ax.set_visible(False)
+            continue
+        rec = np.array(unit["map"]["recovered"], dtype=float)
+        surv = np.array(unit["map"]["survived"], dtype=float)
+        ax.imshow((rec + surv).T / 2, origin="lower", extent=(t_lo, t_hi, d_lo, d_hi),
+                  aspect="auto", cmap="RdYlGn", vmin=0, vmax=1)
+        star = float(c["theta_star"])
+        for s in (-star, star):
+            ax.axvline(s, color="k", ls="--", lw=0.8)
+        ax.grid(False)
+        ax.set_title(f"{c['policy']}, x̂₀ = {'0' if c['estimate0'] == 'zero' else 'x₀'}",
+                     fontsize=8)
+        ax.set_xlabel("θ₀ [rad]")
+        ax.set_ylabel("θ̇₀ [rad/s]")
+    fig.suptitle(f"{name}: noise-free recovery (green recovered, yellow survived unsettled, red "
+                 f"failed); dashed: noisy θ* at ≥ {prm['level']:.0%}")
+    figs = [("region of attraction maps", _save(fig, out, f"{name}_maps.png", plt))]
+
+    fig, ax = plt.subplots(figsize=(6.5, 3.4))
+    width = 0.8 / max(1, len(est))
+    for j, e in enumerate(est):
+        vals = [next((float(c["theta_star"]) for c in cfgs
+                      if c["policy"] == p and c["estimate0"] == e), np.nan) for p in policies]
+        ax.bar(np.arange(len(policies)) + j * width, vals, width,
+               label=f"x̂₀ = {'0' if e == 'zero' else 'x₀'}")
+    ax.set_xticks(np.arange(len(policies)) + width * (len(est) - 1) / 2, policies, fontsize=8)
+    ax.set_ylabel("largest θ₀ [rad]")
+    ax.legend()
+    ax.set_title(f"{name}: largest θ₀ with ≥ {prm['level']:.0%} of "
+                 f"{summ['episodes_per_batch']} noisy episodes surviving")
+    figs.append(("largest recoverable angle", _save(fig, out, f"{name}_theta_star.png", plt)))
+    return figs
