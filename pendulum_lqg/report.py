@@ -14,7 +14,7 @@ a mismatch grid        success and mean cost along pole mass and pole length (th
 (``pole_*_scale``)     and the success over the whole (mass, length) grid per policy
 ``study = "margins"``  Nyquist plots of LQ vs LQG (and LTR) loops with the circle abs(1 + L) = 1;
                        LTR margins vs q; sampled-loop margins vs T
-``study = "roa"``      noise-free recovery maps over (θ₀, θ̇₀); largest θ₀ per policy
+``study = "roa"``      (reads ``roa_map.csv``) noise-free recovery maps over (θ₀, θ̇₀); largest θ₀ per policy
 =====================  =========================================================================
 
 matplotlib (Agg backend) is imported only when a report is made.
@@ -50,7 +50,7 @@ def _plt() -> Any:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    plt.rcParams.update({"figure.dpi": 110, "font.size": 9, "axes.grid": True,
+    plt.rcParams.update({"figure.dpi": 110, "savefig.dpi": 80, "font.size": 9, "axes.grid": True,
                          "grid.alpha": 0.3, "legend.fontsize": 8})
     return plt
 
@@ -188,9 +188,12 @@ def _grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: 
         for key, grp in sorted(_group(sub, series).items()):
             xs, rate, lo, hi = _success_curve(grp, x)
             line, = ax.plot(xs, rate, marker="o", ms=3, label=" ".join(map(str, key)))
-            ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15, lw=0)
+            ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.08, lw=0)
         ax.set_xlabel(LABELS.get(x, x))
         ax.set_ylim(-0.03, 1.03)
+        if len(_group(sub, series)) > 4:
+            for ln, ls in zip(ax.get_lines(), ["-", "--", "-.", ":"] * 4, strict=False):
+                ln.set_linestyle(ls)
         if x in LOG_KEYS:
             ax.set_xscale("log")
         if facets:
@@ -281,12 +284,13 @@ def _mismatch_figures(rows: list[dict[str, object]], out: Path, name: str, serie
         for key, grp in sorted(_group(sub, series).items()):
             xs, rate, lo, hi = _success_curve(grp, x)
             line, = axes[0][col].plot(xs, rate, marker="o", ms=3, label=" ".join(map(str, key)))
-            axes[0][col].fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15, lw=0)
+            axes[0][col].fill_between(xs, lo, hi, color=line.get_color(), alpha=0.08, lw=0)
             xs, m, se = _metric_curve(grp, x, "cost", successes_only=True)
             axes[1][col].errorbar(xs, m, yerr=se, marker="o", ms=3, capsize=2,
                                   color=line.get_color())
         for ax in axes[:, col]:
             ax.set_xscale("log", base=2)
+            ax.set_xticks(xs, [f"{v:g}" for v in xs])
             ax.set_xlabel(f"{LABELS[x]} ({other} = 1)")
         axes[0][col].set_ylim(-0.03, 1.03)
         axes[1][col].set_yscale("log")
@@ -406,16 +410,22 @@ def _roa_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[str
     d_lo, d_hi, _ = prm["map_theta_dot"]
     fig, axes = plt.subplots(len(est), len(policies), figsize=(3.0 * len(policies),
                                                               2.8 * len(est)), squeeze=False)
+    from pendulum_lqg.results import read_csv
+
+    cells = _group(read_csv(folder / "roa_map.csv"), ["config"])
     for c in cfgs:
-        unit = json.loads((folder / "units" / f"c{c['index']:03d}.json").read_text()) \
-            if (folder / "units" / f"c{c['index']:03d}.json").is_file() else None
         ax = axes[est.index(c["estimate0"])][policies.index(c["policy"])]
-        if unit is None:
+        mine = cells.get((c["index"],), [])
+        if not mine:
             ax.set_visible(False)
             continue
-        rec = np.array(unit["map"]["recovered"], dtype=float)
-        surv = np.array(unit["map"]["survived"], dtype=float)
-        ax.imshow((rec + surv).T / 2, origin="lower", extent=(t_lo, t_hi, d_lo, d_hi),
+        ths = sorted({float(r["theta0"]) for r in mine})  # type: ignore[arg-type]
+        tds = sorted({float(r["theta_dot0"]) for r in mine})  # type: ignore[arg-type]
+        Z = np.full((len(tds), len(ths)), np.nan)
+        for r in mine:
+            Z[tds.index(float(r["theta_dot0"])), ths.index(float(r["theta0"]))] = (  # type: ignore[arg-type]
+                (bool(r["survived"]) + bool(r["recovered"])) / 2)
+        ax.imshow(Z, origin="lower", extent=(t_lo, t_hi, d_lo, d_hi),
                   aspect="auto", cmap="RdYlGn", vmin=0, vmax=1)
         star = float(c["theta_star"])
         for s in (-star, star):

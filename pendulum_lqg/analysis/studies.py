@@ -360,11 +360,11 @@ def run_roa(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
         for i, th in enumerate(thetas):
             for j, thd in enumerate(theta_dots):
                 map_rows.append({"config": r["index"], "policy": r["policy"],
-                                 "estimate0": r["estimate0"], "theta0": float(th),
-                                 "theta_dot0": float(thd),
+                                 "estimate0": r["estimate0"], "theta0": round(float(th), 9),
+                                 "theta_dot0": round(float(thd), 9),
                                  "survived": bool(r["map"]["survived"][i][j]),
                                  "recovered": bool(r["map"]["recovered"][i][j]),
-                                 "cost": r["map"]["cost"][i][j]})
+                                 "cost": float(f"{r['map']['cost'][i][j]:.6g}")})
     summary = {"experiment": spec.name, "study": "roa", "seed": spec.seed,
                "episodes_per_batch": spec.episodes, "params": prm,
                "configurations": [{k: v for k, v in r.items() if k not in ("map", "evaluations")}
