@@ -173,9 +173,20 @@ class NoiseStream:
         return z[:, : self.n_proc], z[:, self.n_proc:]
 
     def select(self, rows: np.ndarray) -> None:
-        """Keep only these rows (their generators and undrawn blocks)."""
+        """Keep only these rows (their generators and undrawn blocks).
+
+        ``rows`` is increasing, so the blocks are compacted in place: dropping finished episodes
+        never allocates a second copy of the (largest) noise buffer.
+        """
+        rows = np.asarray(rows)
         self._gens = [self._gens[r] for r in rows]
-        self._block = self._block[rows]
+        if rows.size > 1 and np.any(np.diff(rows) <= 0):
+            self._block = self._block[rows]          # not increasing: plain copy
+        else:
+            for i, r in enumerate(rows.tolist()):
+                if i != r:
+                    self._block[i] = self._block[r]
+            self._block = self._block[: rows.size]
         self._pos = self._pos[rows]
 
     def state_jump(self, z_proc: np.ndarray) -> np.ndarray:
