@@ -166,24 +166,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 # ---- helpers -------------------------------------------------------------------------------------
 def _jsonable(obj: Any) -> Any:
-    import numpy as np
+    from pendulum_lqg.jsonio import plain
 
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
-    if isinstance(obj, complex | np.complexfloating):
-        return [_jsonable(float(obj.real)), _jsonable(float(obj.imag))]
-    if isinstance(obj, np.floating | float):
-        f = float(obj)
-        return f if math.isfinite(f) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
+    return plain(obj)
 
 
 def _noise_from_args(args: argparse.Namespace, scale: float = 1.0) -> Any:

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.jsonio import plain
 
 #: Parameters of each study and their defaults.
 STUDY_PARAMS: dict[str, dict[str, object]] = {
@@ -127,22 +128,7 @@ def _json(obj: object) -> str:
 
 def _plain(obj: object) -> object:
     """JSON-ready copy: arrays → lists, complex → [re, im], non-finite floats → strings."""
-    if isinstance(obj, dict):
-        return {str(k): _plain(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    if isinstance(obj, complex | np.complexfloating):
-        return [_plain(float(obj.real)), _plain(float(obj.imag))]
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, float | np.floating):
-        f = float(obj)
-        return f if np.isfinite(f) else str(f)
-    return obj
+    return plain(obj, nonfinite_as_string=True)
 
 
 def _csv(rows: list[dict[str, object]]) -> str:
