@@ -79,6 +79,8 @@ OBSERVERS = ("none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "k
 
 def _add_design_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("design")
+    g.add_argument("--model", default=None, metavar="XML",
+                   help="MJCF model file (default: the bundled models/cartpole.xml)")
     g.add_argument("--dt", type=_number, default=0.01, metavar="T",
                    help="control period T in seconds, a multiple of the model's physics step "
                         "(default 0.01)")
@@ -211,7 +213,7 @@ def cmd_design(args: argparse.Namespace) -> int:
     from pendulum_lqg.plant import load_plant
     from pendulum_lqg.policy import design_all
 
-    plant = load_plant()
+    plant = load_plant(args.model)
     noise = _noise_from_args(args)
     spec = _spec_from_args(args)
     d = design_all(plant, args.dt, noise, spec)
@@ -335,7 +337,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     from pendulum_lqg.policy import design_policy
     from pendulum_lqg.sim import Scenario, run_episodes
 
-    plant = load_plant()
+    plant = load_plant(args.model)
     noise = _noise_from_args(args, scale=args.noise_scale)
     scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,
                         x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0)

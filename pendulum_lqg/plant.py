@@ -136,14 +136,14 @@ def load_plant(path: str | Path | None = None, *, overrides: ModelOverrides | No
     try:
         spec = mujoco.MjSpec.from_file(str(path))
     except Exception as exc:  # MuJoCo raises ValueError with the parser message
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise ConfigError(f"model: cannot parse {path}: {first}") from exc
+        detail = " ".join(str(exc).split()) or type(exc).__name__   # one line
+        raise ConfigError(f"model: cannot parse {path}: {detail}") from exc
     overrides = overrides or ModelOverrides()
     _apply_overrides(spec, overrides)
     try:
         model = spec.compile()
     except Exception as exc:
-        raise ConfigError(f"model: cannot compile {path}: {str(exc).strip()}") from exc
+        raise ConfigError(f"model: cannot compile {path}: {' '.join(str(exc).split())}") from exc
     return Plant(model=model, path=path, overrides=overrides)
 
 

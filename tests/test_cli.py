@@ -94,6 +94,8 @@ BAD_INPUT = [
     (["design", "--observer-poles=-1+1j,-2,-3,-4"], "observer_poles: pole -1+1j has no "
                                                       "complex-conjugate partner"),
     (["bench", "no_such_experiment"], "experiment: no file 'no_such_experiment'"),
+    (["design", "--model", "/no/such/model.xml"], "model: file not found: /no/such/model.xml"),
+    (["run", "--model", str(ROOT / "README.md")], "model: cannot parse"),
 ]
 
 
