@@ -15,6 +15,8 @@ not depend on the batch size: batched and single-episode runs agree bit for bit.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+
 import numpy as np
 
 from pendulum_lqg.errors import ShapeError
@@ -25,7 +27,7 @@ def mv(M: np.ndarray, X: np.ndarray) -> np.ndarray:
     return np.einsum("ij,nj->ni", M, X)
 
 
-class Estimator:
+class Estimator(ABC):
     """Base: a batch of ``n`` estimates of ``x = [p, θ, ṗ, θ̇]``."""
 
     #: True if the estimator wants the true state instead of the measurement.
@@ -56,11 +58,13 @@ class Estimator:
             self.x_hat[rows] = x_hat0
             self.innovation[rows] = 0.0
 
+    @abstractmethod
     def estimate(self, y: np.ndarray) -> np.ndarray:
-        raise NotImplementedError  # abstract
+        """Measurement (n, p) → the estimate x̂[n] (n, 4) the controller uses now."""
 
+    @abstractmethod
     def update(self, u: np.ndarray) -> None:
-        raise NotImplementedError  # abstract
+        """Time update with the force (n, 1) actually applied over the coming period."""
 
     def select(self, rows: np.ndarray) -> None:
         """Keep only the given rows (episodes that ended are dropped from the batch)."""
