@@ -28,6 +28,7 @@ from typing import Literal
 
 import numpy as np
 
+from pendulum_lqg._config import config_vector
 from pendulum_lqg.errors import ConfigError
 
 #: Control periods of noise drawn at once per episode.
@@ -37,17 +38,6 @@ CHUNK_PERIODS = 256
 LECTURE_W_STEP = 0.04
 LECTURE_PERIOD = 0.01
 LECTURE_V = 0.01
-
-
-def _diag(name: str, value: object, n: int) -> tuple[float, ...]:
-    arr = np.atleast_1d(np.asarray(value, dtype=float)) if not isinstance(value, str) else None
-    if arr is None or arr.ndim != 1 or arr.size not in (1, n):
-        raise ConfigError(f"{name}: expected a number or a list of {n} numbers, got {value!r}")
-    if arr.size == 1:
-        arr = np.full(n, arr[0])
-    if not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        raise ConfigError(f"{name}: expected finite non-negative numbers, got {value!r}")
-    return tuple(float(a) for a in arr)
 
 
 @dataclass(frozen=True)
@@ -74,9 +64,10 @@ class NoiseModel:
             raise ConfigError(f"process: expected 'state' or 'force', got {self.process!r}")
         n = 4 if self.process == "state" else 2
         object.__setattr__(self, "process_density",
-                           _diag("process_density", self.process_density, n))
+                           config_vector("process_density", self.process_density, n, nonneg=True))
         object.__setattr__(self, "measurement_variance",
-                           _diag("measurement_variance", self.measurement_variance, 2))
+                           config_vector("measurement_variance", self.measurement_variance, 2,
+                                         nonneg=True))
         try:
             scale = float(self.scale)
         except (TypeError, ValueError) as exc:

@@ -25,6 +25,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from pendulum_lqg import design
+from pendulum_lqg._config import config_vector
 from pendulum_lqg.design._checks import as_poles
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.estimators import (
@@ -77,14 +78,8 @@ class DesignSpec:
         if self.discretization not in ("zoh", "euler"):
             raise ConfigError(f"discretization: expected 'zoh' or 'euler', got "
                               f"{self.discretization!r}")
-        for name, n in (("Q", 4), ("M0", 4)):
-            val = np.atleast_1d(np.asarray(getattr(self, name), dtype=float))
-            if val.size == 1:
-                val = np.full(n, val[0])
-            if val.shape != (n,) or not np.all(np.isfinite(val)) or np.any(val < 0):
-                raise ConfigError(f"{name}: expected {n} finite non-negative numbers (a diagonal), "
-                                  f"got {getattr(self, name)!r}")
-            object.__setattr__(self, name, tuple(float(v) for v in val))
+        for name in ("Q", "M0"):             # diagonals of 4×4 matrices
+            object.__setattr__(self, name, config_vector(name, getattr(self, name), 4, nonneg=True))
         r = float(self.R)
         if not np.isfinite(r) or r <= 0:
             raise ConfigError(f"R: expected a finite positive number, got {self.R!r}")

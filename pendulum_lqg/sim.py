@@ -31,6 +31,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
+from pendulum_lqg._config import config_vector
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.linearize import steps_per_period
 from pendulum_lqg.metrics import (
@@ -46,19 +47,6 @@ from pendulum_lqg.plant import ModelOverrides, Plant
 
 #: Any state component beyond this magnitude counts as divergence.
 RUNAWAY = 1e6
-
-
-def _vector(name: str, value: object, n: int, *, nonneg: bool = False) -> tuple[float, ...]:
-    try:
-        arr = np.atleast_1d(np.asarray(value, dtype=float))
-    except (TypeError, ValueError) as exc:
-        raise ConfigError(f"{name}: expected {n} numbers, got {value!r}") from exc
-    if arr.size == 1 and n > 1:
-        arr = np.full(n, arr[0])
-    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or (nonneg and np.any(arr < 0)):
-        kind = "non-negative " if nonneg else ""
-        raise ConfigError(f"{name}: expected {n} finite {kind}numbers, got {value!r}")
-    return tuple(float(a) for a in arr)
 
 
 @dataclass(frozen=True)
@@ -99,9 +87,9 @@ class Scenario:
                     or not np.isfinite(value) or value <= 0:
                 raise ConfigError(f"{name}: expected a finite positive number, got {value!r}")
             object.__setattr__(self, name, float(value))
-        object.__setattr__(self, "x0", _vector("x0", self.x0, 4))
-        object.__setattr__(self, "x0_std", _vector("x0_std", self.x0_std, 4, nonneg=True))
-        object.__setattr__(self, "cost_Q", _vector("cost_Q", self.cost_Q, 4, nonneg=True))
+        object.__setattr__(self, "x0", config_vector("x0", self.x0, 4))
+        object.__setattr__(self, "x0_std", config_vector("x0_std", self.x0_std, 4, nonneg=True))
+        object.__setattr__(self, "cost_Q", config_vector("cost_Q", self.cost_Q, 4, nonneg=True))
         if self.estimate0 not in ("zero", "true"):
             raise ConfigError(f"estimate0: expected 'zero' or 'true', got {self.estimate0!r}")
         if not isinstance(self.noise, NoiseModel):

@@ -89,7 +89,7 @@ BAD_INPUT = [
     (["design", "--q", "1,-1,1,1"], "Q: expected 4 finite non-negative numbers"),
     (["design", "--r", "0"], "R: expected a finite positive number, got 0.0"),
     (["design", "--v", "0,0.01"], "V: must be positive definite"),
-    (["design", "--w", "-1"], "process_density: expected finite non-negative numbers"),
+    (["design", "--w", "-1"], "process_density: expected 4 finite non-negative numbers"),
     (["design", "--observer-poles=-1,-2"], "observer_poles: expected 4 poles, found 2"),
     (["design", "--observer-poles=-1+1j,-2,-3,-4"], "observer_poles: pole -1+1j has no "
                                                       "complex-conjugate partner"),

@@ -181,7 +181,7 @@ def test_scenario_validation():
         Scenario(x0=(0.0, 0.1))
     with pytest.raises(ConfigError, match="noise_scale: expected a finite number ≥ 0"):
         NoiseModel(scale=-1.0)
-    with pytest.raises(ConfigError, match="measurement_variance: expected finite non-negative"):
+    with pytest.raises(ConfigError, match="measurement_variance: expected 2 finite non-negative numbers"):
         NoiseModel(measurement_variance=(-0.01, 0.01))
     with pytest.raises(ConfigError, match="observer: unknown 'kalmann'; expected one of none"):
         DesignSpec(observer="kalmann")

@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from pendulum_lqg.design import kalman
-from pendulum_lqg.design._checks import as_matrix
+from pendulum_lqg.design._checks import as_loop, as_matrix
 from pendulum_lqg.errors import ConfigError
 
 
@@ -84,12 +84,7 @@ def lqg_compensator(A: ArrayLike, B: ArrayLike, C: ArrayLike, K: ArrayLike, L: A
     ----------
     A : (n, n), B : (n, m), C : (p, n), K : (m, n), L : (n, p)
     """
-    A = as_matrix("A", A)
-    n = A.shape[0]
-    B = as_matrix("B", B, (n, None))
-    C = as_matrix("C", C, (None, n))
-    K = as_matrix("K", K, (B.shape[1], n))
-    L = as_matrix("L", L, (n, C.shape[0]))
+    A, B, C, K, L = as_loop(A, B, C, K, L)
     return control.ss(A - B @ K - L @ C, L, K, np.zeros((K.shape[0], C.shape[0])))
 
 
@@ -126,12 +121,8 @@ def current_compensator(Phi: ArrayLike, Gamma: ArrayLike, C: ArrayLike, K: Array
 
     — a compensator with direct feedthrough ``KL`` (it uses the newest measurement).
     """
-    Phi = as_matrix("Phi", Phi)
+    Phi, Gamma, C, K, L = as_loop(Phi, Gamma, C, K, L, names=("Phi", "Gamma"))
     n = Phi.shape[0]
-    Gamma = as_matrix("Gamma", Gamma, (n, None))
-    C = as_matrix("C", C, (None, n))
-    K = as_matrix("K", K, (Gamma.shape[1], n))
-    L = as_matrix("L", L, (n, C.shape[0]))
     I_LC = np.eye(n) - L @ C
     Acl = Phi - Gamma @ K
     return control.ss(Acl @ I_LC, Acl @ L, K @ I_LC, K @ L, dt=dt)

@@ -53,6 +53,18 @@ def as_square(name: str, value: ArrayLike, n: int | None = None) -> np.ndarray:
     return arr
 
 
+def as_loop(A: ArrayLike, B: ArrayLike, C: ArrayLike, K: ArrayLike, L: ArrayLike,
+            names: tuple[str, str] = ("A", "B")) -> tuple[np.ndarray, ...]:
+    """Plant ``(A, B, C)`` with state feedback ``K`` (m, n) and observer gain ``L`` (n, p)."""
+    A = as_square(names[0], A)
+    n = A.shape[0]
+    B = as_matrix(names[1], B, (n, None))
+    C = as_matrix("C", C, (None, n))
+    K = as_matrix("K", K, (B.shape[1], n))
+    L = as_matrix("L", L, (n, C.shape[0]))
+    return A, B, C, K, L
+
+
 def as_weight(name: str, value: ArrayLike, n: int, *, definite: bool) -> np.ndarray:
     """A symmetric weight/covariance of size n×n; positive definite if ``definite`` else PSD.
 

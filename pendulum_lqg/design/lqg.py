@@ -12,7 +12,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import as_matrix, as_square
+from pendulum_lqg.design._checks import as_loop
 from pendulum_lqg.errors import DesignError
 
 
@@ -65,12 +65,8 @@ def lqg(A: ArrayLike, B: ArrayLike, C: ArrayLike, K: ArrayLike, L: ArrayLike, *,
     -------
     LQGResult
     """
-    A = as_square("A", A)
+    A, B, C, K, L = as_loop(A, B, C, K, L)
     n = A.shape[0]
-    B = as_matrix("B", B, (n, None))
-    C = as_matrix("C", C, (None, n))
-    K = as_matrix("K", K, (B.shape[1], n))
-    L = as_matrix("L", L, (n, C.shape[0]))
     ctrl = np.linalg.eigvals(A - B @ K)
     if form in ("continuous", "predictor"):
         A_cl = np.block([[A, -B @ K], [L @ C, A - B @ K - L @ C]])

@@ -1,0 +1,25 @@
+"""The one validator for small numeric vectors in configurations (scenario, noise, design spec)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pendulum_lqg.errors import ConfigError
+
+
+def config_vector(name: str, value: object, n: int, *, nonneg: bool = False,
+                  ) -> tuple[float, ...]:
+    """``value`` as a tuple of ``n`` finite floats; a single number is repeated ``n`` times.
+
+    Raises :class:`ConfigError` naming ``name``: "x0: expected 4 finite numbers, got …".
+    """
+    kind = "non-negative " if nonneg else ""
+    try:
+        arr = np.atleast_1d(np.asarray(value, dtype=float))
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"{name}: expected {n} finite {kind}numbers, got {value!r}") from exc
+    if arr.size == 1 and n > 1:
+        arr = np.full(n, arr[0])
+    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or (nonneg and np.any(arr < 0)):
+        raise ConfigError(f"{name}: expected {n} finite {kind}numbers, got {value!r}")
+    return tuple(float(a) for a in arr)
