@@ -36,35 +36,41 @@ EPISODE_FIELDS: tuple[str, ...] = (
 )
 
 
-def period_integrals(x_start: np.ndarray, states: np.ndarray, u: np.ndarray, failed: np.ndarray,
-                     fail_step: np.ndarray, *, h: float, Q: np.ndarray, R: float,
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def period_integrals(xs: np.ndarray, u: np.ndarray, fail_step: np.ndarray | None, *, h: float,
+                     Qh: np.ndarray, R: float) -> tuple[np.ndarray, float | np.ndarray, np.ndarray]:
     """The integrals of one control period — the one definition of the period's cost.
+
+    ``cost = Σ_j Σ_i (h·Q_i)·xs[j, i]² + (R·t_alive)·u²``: the rectangle rule at the physics
+    step h, with the state at the start of each physics step, up to and including the step in which
+    the episode failed.
 
     Parameters
     ----------
-    x_start : (n, 4) state at the start of the period; states : (n, k, 4) state after each
-    physics step; u : (n,) applied (saturated) force; failed : (n,) bool; fail_step : (n,) first
-    failing physics step (``k`` if none); h : physics step; Q : (4,) diagonal; R : input weight
+    xs : (n, k, 4) state at the start of each physics step (the period's initial state, then the
+        states after physics steps 1 … k−1)
+    u : (n,) applied (saturated) force
+    fail_step : ``None`` if no row failed, else (n,) first failing physics step (``k`` if none)
+    h : physics step; Qh : (4,) ``h·diag(Q)``; R : input weight
 
     Returns
     -------
-    xs : (n, k, 4) state at the start of each alive physics step (0 after a failure);
-    t_alive : (n,) alive time in the period; sq : (n, 4) ``Σ xs²``;
+    xs : (n, k, 4) the states, zeroed after a row's failing step;
+    t_alive : alive time in the period, a float (``k·h``) when no row failed, else (n,);
     cost : (n,) ``∫ xᵀ diag(Q) x + R u² dt`` over the alive part of the period
     """
-    k = states.shape[1]
-    xs = np.concatenate([x_start[:, None, :], states[:, :-1, :]], axis=1)   # (n, k, 4)
-    if failed.any():
+    k = xs.shape[1]
+    t_alive: float | np.ndarray
+    if fail_step is None:
+        t_alive = k * h
+    else:
         mask = np.arange(k)[None, :] <= fail_step[:, None]                 # (n, k)
         t_alive = mask.sum(axis=1) * h
         xs = np.where(mask[:, :, None], xs, 0.0)
-    else:
-        t_alive = np.empty(xs.shape[0])
-        t_alive.fill(k * h)
-    sq = (xs * xs).sum(axis=1)                                               # (n, 4)
-    cost = h * np.einsum("ni,i->n", sq, Q) + R * u * u * t_alive
-    return xs, t_alive, sq, cost
+    c = xs * xs
+    c *= Qh
+    cost = c.sum(axis=(1, 2))
+    cost += (R * t_alive) * u * u
+    return xs, t_alive, cost
 
 
 class MetricsAccumulator:
@@ -75,7 +81,7 @@ class MetricsAccumulator:
 
     def __init__(self, n: int, sim: Simulator) -> None:
         self.h, self.k, self.dt = sim.h, sim.k, sim.dt
-        self.Q, self.R, self.u_max = sim.Q, sim.R, sim.u_max
+        self.Qh, self.R, self.u_max = sim.Qh, sim.R, sim.u_max
         self.band = sim.scenario.settle_band
         self.duration = sim.n_periods * sim.dt
         self._alloc(max(n, 1))
@@ -110,13 +116,15 @@ class MetricsAccumulator:
         self.reason[ids] = FAIL_NONE
         self.done[ids] = False
 
-    def accumulate(self, ids: np.ndarray, x_start: np.ndarray, states: np.ndarray, u: np.ndarray,
+    def accumulate(self, ids: np.ndarray, xs: np.ndarray, u: np.ndarray,
                    x_hat: np.ndarray | None, failed: np.ndarray, reason: np.ndarray,
-                   fail_step: np.ndarray, t: np.ndarray) -> np.ndarray:
-        """Add one control period; returns the period's cost per row."""
+                   fail_step: np.ndarray | None, t: np.ndarray) -> np.ndarray:
+        """Add one control period (``xs``, ``fail_step``: see :func:`period_integrals`); returns
+        the period's cost per row."""
         h, k = self.h, self.k
-        xs, t_alive, sq, cost = period_integrals(x_start, states, u, failed, fail_step,
-                                                 h=h, Q=self.Q, R=self.R)
+        x_start = xs[:, 0]
+        xs, t_alive, cost = period_integrals(xs, u, fail_step, h=h, Qh=self.Qh, R=self.R)
+        sq = (xs * xs).sum(axis=1)                                            # (n, 4)
         self.cost[ids] += cost
         self.alive[ids] += t_alive
         self.theta2[ids] += h * sq[:, 1]
@@ -136,7 +144,7 @@ class MetricsAccumulator:
             err = x_hat - x_start
             self.est2[ids] += err * err
             self.n_est[ids] += 1
-        if failed.any():
+        if fail_step is not None:
             f = ids[failed]
             self.fail_time[f] = t[failed] + (fail_step[failed] + 1) * h
             self.reason[f] = reason[failed]

@@ -109,7 +109,14 @@ class NoiseStream:
     """Per-episode noise for a batch, drawn in fixed blocks from each episode's own generator.
 
     Each control period consumes, per episode, ``n_proc`` process normals (``4`` for state noise,
-    ``2·k`` for force noise redrawn every physics step) followed by 2 measurement normals.
+    ``2·k`` for force noise redrawn every physics step) followed by 2 measurement normals. A block
+    of :data:`CHUNK_PERIODS` periods is drawn at once and scaled to physical units on the spot, so
+    a period's draw is a view: the state jump ``δx`` (or the ``k`` generalised forces) and the
+    measurement noise ``v``.
+
+    While every row is at the same period (a batch run, or a single env) the stream keeps one
+    cursor for all rows; per-row draws (vector envs, whose rows restart at different periods) switch
+    it to per-row positions. Both give the same numbers.
     """
 
     def __init__(self, noise: NoiseModel, *, steps_per_period: int, dt: float, h: float) -> None:
@@ -123,70 +130,90 @@ class NoiseStream:
         else:
             self.proc_std = s * np.sqrt(np.asarray(noise.process_density) / h)    # f per step
         self.meas_std = s * np.sqrt(np.asarray(noise.measurement_variance))
-        self.enabled = s > 0 and (np.any(self.proc_std > 0) or np.any(self.meas_std > 0))
+        self.enabled = bool(s > 0 and (np.any(self.proc_std > 0) or np.any(self.meas_std > 0)))
+        # std of each process column of a period (force noise: [slider, hinge] per physics step)
+        self._proc_scale = np.tile(self.proc_std, self.n_proc // self.proc_std.size)
         self._gens: list[np.random.Generator] = []
-        self._block = np.zeros((0, CHUNK_PERIODS, self.width))
+        self._proc = np.zeros((0, CHUNK_PERIODS, self.n_proc))
+        self._meas = np.zeros((0, CHUNK_PERIODS, 2))
         self._pos = np.zeros(0, dtype=np.int64)
+        self._cursor: int | None = CHUNK_PERIODS     # the common position, or None (per row)
+
+    @property
+    def n(self) -> int:
+        return len(self._gens)
 
     def reset(self, generators: list[np.random.Generator], rows: np.ndarray | None = None) -> None:
         """Attach generators (all rows, or the given rows of an existing batch)."""
         if rows is None:
             self._gens = list(generators)
             n = len(generators)
-            self._block = np.zeros((n, CHUNK_PERIODS, self.width))
+            self._proc = np.zeros((n, CHUNK_PERIODS, self.n_proc))
+            self._meas = np.zeros((n, CHUNK_PERIODS, 2))
             self._pos = np.full(n, CHUNK_PERIODS, dtype=np.int64)
+            self._cursor = CHUNK_PERIODS
         else:
+            self._per_row()
             for r, g in zip(rows, generators, strict=True):
                 self._gens[r] = g
             self._pos[rows] = CHUNK_PERIODS
 
+    def _per_row(self) -> None:
+        """Leave the common cursor: from now on each row keeps its own position."""
+        if self._cursor is not None:
+            self._pos[:] = self._cursor
+            self._cursor = None
+
+    def _refill(self, r: int) -> None:
+        z = self._gens[r].standard_normal((CHUNK_PERIODS, self.width))
+        np.multiply(z[:, : self.n_proc], self._proc_scale, out=self._proc[r])
+        np.multiply(z[:, self.n_proc:], self.meas_std, out=self._meas[r])
+
     def draw(self, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Unit normals for the next period of each row (default: every row): process
-        (len, n_proc), meas (len, 2)."""
-        n = self._pos.size if rows is None else rows.size
+        """The next period's noise of each row (default: every row), in physical units.
+
+        Returns the process noise ``(len, n_proc)`` (state noise: the jump ``δx``; force noise:
+        see :meth:`forces`) and the measurement noise ``v`` ``(len, 2)``. They may be views of the
+        stream's block: use them before the next draw.
+        """
         if not self.enabled:
+            n = self.n if rows is None else len(rows)
             return np.zeros((n, self.n_proc)), np.zeros((n, 2))
-        pos = self._pos if rows is None else self._pos[rows]
-        stale = pos >= CHUNK_PERIODS
-        if stale.any():
-            for r in (np.nonzero(stale)[0] if rows is None else rows[stale]):
-                self._block[r] = self._gens[r].standard_normal((CHUNK_PERIODS, self.width))
-                self._pos[r] = 0
-            pos = self._pos if rows is None else self._pos[rows]
-        if rows is None:
-            p0 = pos[0] if n else 0
-            # common case: the whole batch in step
-            z = self._block[:, p0] if n and (pos == p0).all() else self._block[np.arange(n), pos]
-            self._pos += 1
-        else:
-            z = self._block[rows, pos]
-            self._pos[rows] += 1
-        return z[:, : self.n_proc], z[:, self.n_proc:]
+        c = self._cursor
+        if rows is None and c is not None:                # the whole batch in step
+            if c == CHUNK_PERIODS:
+                for r in range(self.n):
+                    self._refill(r)
+                c = 0
+            self._cursor = c + 1
+            return self._proc[:, c], self._meas[:, c]
+        self._per_row()
+        rows = np.arange(self.n) if rows is None else np.asarray(rows)
+        for r in rows[self._pos[rows] >= CHUNK_PERIODS].tolist():
+            self._refill(r)
+            self._pos[r] = 0
+        pos = self._pos[rows]
+        self._pos[rows] += 1
+        return self._proc[rows, pos], self._meas[rows, pos]
 
     def select(self, rows: np.ndarray) -> None:
         """Keep only these rows (their generators and undrawn blocks).
 
         ``rows`` is increasing, so the blocks are compacted in place: dropping finished episodes
-        never allocates a second copy of the (largest) noise buffer.
+        never allocates a second copy of the (largest) noise buffers.
         """
         rows = np.asarray(rows)
         self._gens = [self._gens[r] for r in rows]
         if rows.size > 1 and np.any(np.diff(rows) <= 0):
-            self._block = self._block[rows]          # not increasing: plain copy
+            self._proc, self._meas = self._proc[rows], self._meas[rows]   # not increasing: copy
         else:
             for i, r in enumerate(rows.tolist()):
                 if i != r:
-                    self._block[i] = self._block[r]
-            self._block = self._block[: rows.size]
+                    self._proc[i] = self._proc[r]
+                    self._meas[i] = self._meas[r]
+            self._proc, self._meas = self._proc[: rows.size], self._meas[: rows.size]
         self._pos = self._pos[rows]
 
-    def state_jump(self, z_proc: np.ndarray) -> np.ndarray:
-        """δx (len, 4) for state noise."""
-        return z_proc * self.proc_std
-
-    def forces(self, z_proc: np.ndarray) -> np.ndarray:
-        """Generalised forces (len, k, 2) for force noise, one per physics step."""
-        return z_proc.reshape(-1, self.k, 2) * self.proc_std
-
-    def measurement(self, z_meas: np.ndarray) -> np.ndarray:
-        return z_meas * self.meas_std
+    def forces(self, w: np.ndarray) -> np.ndarray:
+        """Generalised forces (len, k, 2) of a force-noise draw, one per physics step."""
+        return w.reshape(-1, self.k, 2)

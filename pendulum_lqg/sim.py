@@ -36,7 +36,6 @@ from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.linearize import steps_per_period
 from pendulum_lqg.metrics import (
     FAIL_DIVERGED,
-    FAIL_NONE,
     FAIL_POLE,
     FAIL_TRACK,
     MetricsAccumulator,
@@ -177,6 +176,7 @@ class Simulator:
         self.track = plant.track_limit
         self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h)
         self.Q = np.asarray(scenario.cost_Q)
+        self.Qh = self.h * self.Q
         self.R = scenario.cost_R
         nstate, qpos_cols, qvel_cols = plant.physics_state_layout
         self._nstate = nstate
@@ -185,6 +185,7 @@ class Simulator:
         self._state_slice = slice(self._cols[0], self._cols[0] + 4) if contiguous else self._cols
         self._time_col = 0
         self._force_noise = scenario.noise.process == "force" and self.noise.enabled
+        self._state_noise = scenario.noise.process == "state" and self.noise.enabled
         st = mujoco.mjtState
         self._control_spec = st.mjSTATE_CTRL.value | (
             st.mjSTATE_QFRC_APPLIED.value if self._force_noise else 0)
@@ -237,6 +238,8 @@ class Simulator:
         self._state_out = np.empty((n, self.k, self._nstate))
         self._ctrl_buf = np.zeros((n, self.k, self._ncontrol))
         self._init_buf = np.zeros((n, self._nstate))     # only the x columns are ever written
+        # one period of each row: x at the start | the k physics states | x at the end
+        self._period_buf = np.empty((n, self.k + 2, 4))
 
     # ---- episodes ----------------------------------------------------------------------------
     def reset(self, generators: list[np.random.Generator], *, ids: np.ndarray | None = None,
@@ -275,7 +278,7 @@ class Simulator:
             self.noise.reset(generators)
             if self._streamed:
                 self.metrics = MetricsAccumulator(self.ids.max(initial=-1) + 1, self)
-            self._z_proc = np.zeros((n, self.noise.n_proc))
+            self._w = np.zeros((n, self.noise.n_proc))
         else:
             rows = np.asarray(rows)
             self.x[rows] = x0
@@ -302,13 +305,13 @@ class Simulator:
         once before each :meth:`step`.
         """
         if rows is None:
-            z_proc, z_meas = self.noise.draw()
-            self._z_proc = z_proc
-            return self.x[:, :2] + self.noise.measurement(z_meas)
+            self._w, v = self.noise.draw()
+            return self.x[:, :2] + v
         rows = np.asarray(rows)
-        z_proc, z_meas = self.noise.draw(rows)
-        self._z_proc[rows] = z_proc
-        return self.x[rows, :2] + self.noise.measurement(z_meas)
+        w, v = self.noise.draw(rows)
+        self._w = self._w.copy()             # it may be a view of the noise block
+        self._w[rows] = w
+        return self.x[rows, :2] + v
 
     def noise_free_measurement(self) -> np.ndarray:
         return self.x[:, :2].copy()
@@ -322,68 +325,71 @@ class Simulator:
         x_hat : (n, 4) the estimate the controller used at this sample, for the estimation-error
             metric (optional)
         """
-        # saturation (np.minimum/np.maximum: np.clip's values, at a fraction of its overhead)
-        u = np.minimum(np.maximum(np.asarray(u, dtype=float).reshape(-1), -self.u_max), self.u_max)
-        n = self.n
+        u = np.asarray(u, dtype=float).reshape(-1)
+        n, k = self.n, self.k
         if u.shape[0] != n:
             raise ConfigError(f"u: expected {n} forces, got {u.shape[0]}")
-        forces = self.noise.forces(self._z_proc) if self._force_noise else None
+        # saturation (np.minimum/np.maximum: np.clip's values, at a fraction of its overhead)
+        u = np.minimum(np.maximum(u, -self.u_max), self.u_max)
+        buf = self._period_buf[:n]
+        buf[:, 0] = self.x
+        states = buf[:, 1:k + 1]
+        forces = self.noise.forces(self._w) if self._force_noise else None
         if self.backend == "rollout":
-            states, reset_flag = self._advance_rollout(u, forces)
+            reset_flag = self._advance_rollout(u, forces, states)
         else:
-            states, reset_flag = self._advance_step(u, forces)
-        x_start = self.x
+            reset_flag = self._advance_step(u, forces, states)
         # state noise: one jump per period at its end (x ← x + δx)
-        x_end = states[:, -1].copy()
-        if self.scenario.noise.process == "state" and self.noise.enabled:
-            x_end += self.noise.state_jump(self._z_proc)
-        failed, reason, fail_step = self._detect_failure(states, x_end, reset_flag)
-        if self.metrics is not None:
-            cost = self.metrics.accumulate(self.ids, x_start, states, u, x_hat, failed, reason,
-                                           fail_step, self.t)
+        if self._state_noise:
+            np.add(buf[:, k], self._w, out=buf[:, k + 1])
         else:
-            cost = period_integrals(x_start, states, u, failed, fail_step, h=self.h, Q=self.Q,
-                                    R=self.R)[3]
+            buf[:, k + 1] = buf[:, k]
+        failed, reason, fail_step = self._detect_failure(buf, reset_flag)
+        xs = buf[:, :k]
+        if self.metrics is not None:
+            cost = self.metrics.accumulate(self.ids, xs, u, x_hat, failed, reason, fail_step,
+                                           self.t)
+        else:
+            cost = period_integrals(xs, u, fail_step, h=self.h, Qh=self.Qh, R=self.R)[2]
         self.t = self.t + self.dt
         self.period += 1
-        self.x = x_end
-        return StepResult(x=x_end, cost=cost, failed=failed, reason=reason, states=states)
+        self.x = buf[:, k + 1].copy()
+        return StepResult(x=self.x, cost=cost, failed=failed, reason=reason, states=states)
 
     def select(self, rows: np.ndarray) -> None:
         """Keep only these rows (drop finished episodes from the batch)."""
         self.x, self.t, self.period = self.x[rows], self.t[rows], self.period[rows]
         self.ids = self.ids[rows]
-        self._z_proc = self._z_proc[rows]
+        self._w = self._w[rows]
         self.noise.select(rows)
 
     # ---- physics -----------------------------------------------------------------------------
-    def _initial_physics_state(self) -> np.ndarray:
-        init = self._init_buf[: self.n]
-        init[:, self._state_slice] = self.x
-        return init
-
-    def _advance_rollout(self, u: np.ndarray, forces: np.ndarray | None,
-                         ) -> tuple[np.ndarray, np.ndarray]:
+    def _advance_rollout(self, u: np.ndarray, forces: np.ndarray | None, out: np.ndarray,
+                         ) -> np.ndarray:
+        """k physics steps of every row into ``out`` (n, k, 4); returns the rows MuJoCo reset."""
         n = self.n
         assert self._rollout is not None
-        init = self._initial_physics_state()
+        init = self._init_buf[:n]
+        init[:, self._state_slice] = self.x
         ctrl = self._ctrl_buf[:n]
         ctrl[:, :, 0] = u[:, None]
         if forces is not None:
             ctrl[:, :, 1:][:, :, self.plant.qvel_index] = forces
         state_out = self._state_out[:n]
+        # one chunk of rows per thread: the rows are equal work, and fewer chunks cost less
+        chunk = -(-n // self._nthread) if self._nthread > 1 else None
         self._rollout.rollout(self._models if n == self._capacity else self._models[:n],
                               self._datas, init, ctrl, control_spec=self._control_spec,
-                              skip_checks=True, nstep=self.k, state=state_out)
+                              skip_checks=True, nstep=self.k, state=state_out, chunk_size=chunk)
+        out[...] = state_out[:, :, self._state_slice]
         # MuJoCo resets the data (time back to 0) when the integration goes unstable, so the
         # last step's time falls short of k·h.
-        reset_flag = state_out[:, -1, self._time_col] < (self.k - 0.5) * self.h
-        return state_out[:, :, self._state_slice], reset_flag
+        return state_out[:, -1, self._time_col] < (self.k - 0.5) * self.h
 
-    def _advance_step(self, u: np.ndarray, forces: np.ndarray | None,
-                      ) -> tuple[np.ndarray, np.ndarray]:
+    def _advance_step(self, u: np.ndarray, forces: np.ndarray | None, out: np.ndarray,
+                      ) -> np.ndarray:
+        """The same with a plain ``mj_step`` loop, one row at a time."""
         m, d = self.model, self._data
-        states = np.empty((self.n, self.k, 4))
         reset_flag = np.zeros(self.n, dtype=bool)
         qi, vi = self.plant.qpos_index, self.plant.qvel_index
         for r in range(self.n):
@@ -395,28 +401,31 @@ class Simulator:
                 if forces is not None:
                     d.qfrc_applied[vi] = forces[r, j]
                 mujoco.mj_step(m, d)
-                states[r, j, :2] = d.qpos[qi]
-                states[r, j, 2:] = d.qvel[vi]
+                out[r, j, :2] = d.qpos[qi]
+                out[r, j, 2:] = d.qvel[vi]
             reset_flag[r] = abs(d.time - self.k * self.h) > 0.5 * self.h
-        return states, reset_flag
+        return reset_flag
 
-    def _detect_failure(self, states: np.ndarray, x_end: np.ndarray, reset_flag: np.ndarray,
-                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """First failing physics step of each row (or ``k`` if none) and the reason code."""
+    def _detect_failure(self, buf: np.ndarray, reset_flag: np.ndarray,
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Failure of each row in the period ``buf`` (n, k+2, 4) = [x start | k physics states |
+        x end]: ``failed``, the reason codes and the first failing physics step (``k`` if none),
+        or ``None`` for the latter when no row failed."""
         sc = self.scenario
-        n = self.n
-        if n:
-            # fast path, the common case: every value finite and inside every limit, so the full
-            # checks below would find no failure (numpy's max keeps a nan, and a nan fails every
-            # comparison here, so it takes the full path)
-            p, th, v, w = np.abs(states).max(axis=(0, 1)).tolist()
-            if (th <= sc.theta_max and p < self.track and v <= RUNAWAY and w <= RUNAWAY
-                    and float(np.abs(x_end).max()) <= RUNAWAY and not reset_flag.any()):
-                reason = np.empty(n, dtype=np.int8)
-                reason.fill(FAIL_NONE)
-                fail_step = np.empty(n, dtype=np.int64)
-                fail_step.fill(self.k)
-                return np.zeros(n, dtype=bool), reason, fail_step
+        n, k = self.n, self.k
+        failed = np.zeros(n, dtype=bool)
+        reason = np.zeros(n, dtype=np.int8)                      # FAIL_NONE is 0
+        if n == 0:
+            return failed, reason, None
+        # fast path, the common case: every value finite and inside every limit (the end state
+        # too, a stricter test than its own), so the full checks below would find no failure
+        # (numpy's max keeps a nan, and a nan fails every comparison here, so it takes the full
+        # path)
+        p, th, v, w = np.abs(buf[:, 1:]).max(axis=(0, 1)).tolist()
+        if th <= sc.theta_max and p < self.track and v <= RUNAWAY and w <= RUNAWAY \
+                and not reset_flag.any():
+            return failed, reason, None
+        states, x_end = buf[:, 1:k + 1], buf[:, k + 1]
         with np.errstate(invalid="ignore"):
             mag = np.abs(states)
             # ``not (|x| <= RUNAWAY)`` is true for nan, inf and runaway values alike
@@ -427,14 +436,14 @@ class Simulator:
         bad[:, -1] |= end_bad | reset_flag
         any_fail = bad | pole | track
         failed = any_fail.any(axis=1)
-        fail_step = np.where(failed, np.argmax(any_fail, axis=1), self.k)
-        reason = np.full(self.n, FAIL_NONE, dtype=np.int8)
+        fail_step = np.where(failed, np.argmax(any_fail, axis=1), k)
         if failed.any():
             idx = np.nonzero(failed)[0]
             s = fail_step[idx]
             reason[idx] = np.where(bad[idx, s], FAIL_DIVERGED,
                                    np.where(pole[idx, s], FAIL_POLE, FAIL_TRACK))
-        return failed, reason, fail_step
+            return failed, reason, fail_step
+        return failed, reason, None
 
 
 def _cpu_count() -> int:

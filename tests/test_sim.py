@@ -117,7 +117,7 @@ def test_lecture_noise_conversion():
     np.testing.assert_allclose(stream.proc_std, 0.01 * np.sqrt(0.04))     # T·σ_w
     np.testing.assert_allclose(stream.meas_std, 0.1)
     stream.reset([np.random.default_rng(0)])
-    jumps = np.array([stream.state_jump(stream.draw(np.arange(1))[0])[0] for _ in range(20000)])
+    jumps = np.array([stream.draw(np.arange(1))[0][0] for _ in range(20000)])
     # off-diagonal sampling s.e. is 4e-6/√20000 ≈ 3e-8: allow 5 s.e.
     np.testing.assert_allclose(np.cov(jumps.T), noise.W * 0.01, rtol=0.05, atol=1.5e-7)
     half = NoiseStream(noise.with_scale(0.5), steps_per_period=10, dt=0.01, h=0.001)
@@ -125,17 +125,25 @@ def test_lecture_noise_conversion():
 
 
 def test_noise_is_drawn_in_blocks_independent_of_batch_and_length():
-    """An episode's noise is the same alone or in a batch, and its stream does not depend on N."""
+    """An episode's noise is the same alone or in a batch, drawn with the batch's common cursor
+    or per row, and its stream does not depend on N."""
     noise = NoiseModel.lecture()
     a = NoiseStream(noise, steps_per_period=10, dt=0.01, h=0.001)
     b = NoiseStream(noise, steps_per_period=10, dt=0.01, h=0.001)
     a.reset([np.random.default_rng(s) for s in (11, 12, 13)])
     b.reset([np.random.default_rng(12)])
-    for _ in range(600):                                     # crosses block boundaries
-        za = a.draw(np.arange(3))
+    for i in range(600):                                     # crosses block boundaries
+        za = a.draw() if i < 300 else a.draw(np.arange(3))   # common cursor, then per row
         zb = b.draw(np.arange(1))
         np.testing.assert_array_equal(za[0][1], zb[0][0])
         np.testing.assert_array_equal(za[1][1], zb[1][0])
+    # in physical units: v = σ_v · z with the generator's own normals
+    c = NoiseStream(noise, steps_per_period=10, dt=0.01, h=0.001)
+    c.reset([np.random.default_rng(12)])
+    z = np.random.default_rng(12).standard_normal((2, 6))
+    w, v = c.draw()
+    np.testing.assert_array_equal(w[0], z[0, :4] * c.proc_std)
+    np.testing.assert_array_equal(v[0], z[0, 4:] * c.meas_std)
 
 
 # ---- failures and divergence ---------------------------------------------------------------------
