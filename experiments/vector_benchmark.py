@@ -3,7 +3,13 @@
 Both come from ``gymnasium.make_vec("pendulum_lqg/CartPoleLQG-v0", num_envs=N)``: the registered
 vector entry point (one batched ``mujoco.rollout`` per step) and ``vectorization_mode="sync"``
 (N single envs in a Python loop). Both run the same episodes (same seeds, SAME_STEP autoreset)
-driven by the batched LQG agent; only ``step`` calls are timed, the best of ``--repeats``.
+driven by the batched LQG agent; only ``step`` calls are timed. The three measurements below take
+turns, one timed run each per round, and each keeps its best run.
+
+The physics alone bounds what any vector env can reach: the third line times bare
+``mujoco.rollout`` calls of the same batch (N rows × k physics steps, the native env's threads and
+chunking, no Python around them). ``sync / physics`` is therefore the ceiling of the native/sync
+ratio on this machine; with ``c`` cores it grows about like ``c`` (the sync env uses one).
 
 Usage::
 
@@ -20,6 +26,8 @@ import numpy as np
 
 import pendulum_lqg
 from pendulum_lqg.agent import LQGAgent
+from pendulum_lqg.perf import raw_rollout_rate
+from pendulum_lqg.sim import rollout_chunk
 
 
 def time_steps(envs: gym.vector.VectorEnv, agent: LQGAgent, steps: int, seed: int) -> float:
@@ -41,23 +49,37 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--num-envs", type=int, default=64)
     ap.add_argument("--steps", type=int, default=300, help="vector steps per timed run")
-    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--repeats", type=int, default=3, help="rounds (one timed run each)")
     args = ap.parse_args()
     n = args.num_envs
     native = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n)
     sync = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n, vectorization_mode="sync",
                         vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP})
-    k = native.unwrapped.frame_skip
-    rates = {}
-    for name, envs in (("native", native), ("sync", sync)):
-        # the sync env's sub-envs are plain single envs: the agent acts on the stacked batch
-        agent = LQGAgent(native)
+    sim = native.unwrapped._sim
+    k, nthread = sim.k, sim.nthread
+    # the sync env's sub-envs are plain single envs: the agent acts on the stacked batch
+    agent = LQGAgent(native)
+    contenders = {"native": native, "sync": sync}
+    for envs in contenders.values():
         time_steps(envs, agent, 20, seed=0)                     # warm-up
-        best = min(time_steps(envs, agent, args.steps, seed=r) for r in range(args.repeats))
-        rates[name] = n * args.steps / best
-        print(f"{name:>7}: {rates[name]:12,.0f} env steps/s ({rates[name] * k:14,.0f} physics "
-              f"steps/s) with {n} envs")
-    print(f"  ratio: {rates['native'] / rates['sync']:.1f}× (native / sync)")
+    print(f"{n} envs, {args.steps} vector steps per run, {args.repeats} rounds, seeds "
+          f"0..{args.repeats - 1}, {k} physics steps per env step, {nthread} rollout threads")
+    rates: dict[str, list[float]] = {"native": [], "sync": [], "physics": []}
+    for r in range(args.repeats):
+        for name, envs in contenders.items():
+            rates[name].append(n * args.steps / time_steps(envs, agent, args.steps, seed=r))
+        rates["physics"].append(raw_rollout_rate(native.unwrapped.plant, n, k, nthread,
+                                                 calls=args.steps,
+                                                 chunk_size=rollout_chunk(n, nthread)) / k)
+    best = {name: max(v) for name, v in rates.items()}
+    for name, label in (("native", "native vector env"), ("sync", "SyncVectorEnv"),
+                        ("physics", "physics only (bare rollout)")):
+        print(f"{label:>28}: {best[name]:12,.0f} env steps/s ({best[name] * k:14,.0f} physics "
+              f"steps/s)")
+    print(f"{'ratio native / sync':>28}: {best['native'] / best['sync']:.1f}×")
+    print(f"{'ceiling physics / sync':>28}: {best['physics'] / best['sync']:.1f}×   (no vector env "
+          f"can exceed this here; native reaches {best['native'] / best['physics']:.0%} of the "
+          f"physics rate)")
     native.close()
     sync.close()
 

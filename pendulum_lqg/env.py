@@ -117,12 +117,17 @@ class EnvConfig:
         return plant, sim
 
 
-def step_reward(cost: np.ndarray, failed: np.ndarray, scale_dt: float) -> np.ndarray:
+def step_reward(cost: np.ndarray | np.float64, failed: np.ndarray | bool, scale_dt: float,
+                ) -> np.ndarray | float:
     """``r = exp(−c / (s·T))`` for a period that survived, ``0`` for the period that failed.
 
-    One function for the single and the vector env, so both give the same floats.
+    One function for the single env (a scalar cost) and the vector env (arrays), so both give the
+    same floats.
     """
-    return np.where(failed, 0.0, np.exp(-cost / scale_dt))
+    r = np.exp(cost / -scale_dt)
+    if isinstance(r, np.ndarray):
+        return np.where(failed, 0.0, r)
+    return 0.0 if failed else float(r)
 
 
 def _action_force(action: object, n: int) -> np.ndarray:
@@ -316,10 +321,10 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
             raise PendulumLQGError("step: the episode has failed; call reset() first")
         sim = self._sim
         res = sim.step(_action_force(action, 1))
+        failed = bool(res.failed[0])
+        reward = step_reward(res.cost[0], failed, self._scale_dt)
         cost = float(res.cost[0])
         self._running_cost += cost
-        failed = bool(res.failed[0])
-        reward = 0.0 if failed else float(step_reward(res.cost, res.failed, self._scale_dt)[0])
         if failed:
             self._ended = True
             obs = self._noise_free_observation()
@@ -382,6 +387,10 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         # GL resources (and the camera, which does not pickle) are made again on demand
         state["_renderer"] = state["_render_data"] = state["_camera"] = None
         return state
+
+
+#: ``FAIL_REASONS`` indexed by code, for the vector infos.
+_REASON_NAMES = np.array([FAIL_REASONS[c] for c in range(len(FAIL_REASONS))], dtype=object)
 
 
 def _image_size(plant: Plant, width: int, height: int) -> tuple[int, int]:
@@ -531,9 +540,11 @@ class CartPoleLQGVectorEnv(VectorEnv):
     def _infos(self, rows: np.ndarray, cost: np.ndarray, reason: np.ndarray) -> dict[str, Any]:
         """Vector infos (arrays with ``_key`` masks) of ``rows``, as ``SyncVectorEnv`` builds."""
         n, sim = self.num_envs, self._sim
-        mask = np.zeros(n, dtype=bool)
-        mask[rows] = True
         full = rows.size == n
+        mask = np.ones(n, dtype=bool)
+        if not full:
+            mask[:] = False
+            mask[rows] = True
         state = np.zeros((n, 4))
         state[rows] = sim.x[rows]
         values: dict[str, np.ndarray] = {
@@ -543,12 +554,11 @@ class CartPoleLQGVectorEnv(VectorEnv):
         values["cost"][rows] = cost
         values["running_cost"][rows] = self._running_cost[rows]
         values["time"][rows] = sim.t[rows]
-        for r, code in zip(rows, reason, strict=True):
-            values["failure_reason"][r] = FAIL_REASONS[int(code)]
+        values["failure_reason"][rows] = _REASON_NAMES[reason]
         out: dict[str, Any] = {}
         for key, arr in values.items():
             out[key] = arr
-            out["_" + key] = mask.copy() if not full else np.ones(n, dtype=bool)
+            out["_" + key] = mask.copy()
         return out
 
     def close_extras(self, **kwargs: Any) -> None:

@@ -28,8 +28,9 @@ from pendulum_lqg.policy import DesignSpec, design_policy
 from pendulum_lqg.sim import Scenario, _cpu_count, run_episodes
 
 
-def raw_rollout_rate(plant: object, episodes: int, nstep: int, nthread: int) -> float:
-    """Physics steps per second of one open-loop rollout of ``episodes × nstep`` steps."""
+def raw_rollout_rate(plant: object, episodes: int, nstep: int, nthread: int, *,
+                     calls: int = 1, chunk_size: int | None = None) -> float:
+    """Physics steps per second of ``calls`` open-loop rollouts of ``episodes × nstep`` steps."""
     m = plant.model  # type: ignore[attr-defined]
     nstate = mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_FULLPHYSICS)
     init = np.zeros((episodes, nstate))
@@ -38,11 +39,13 @@ def raw_rollout_rate(plant: object, episodes: int, nstep: int, nthread: int) -> 
     datas = [mujoco.MjData(m) for _ in range(max(1, nthread))]
     state = np.empty((episodes, nstep, nstate))
     sens = np.empty((episodes, nstep, m.nsensordata))
+    models = [m] * episodes
     with mj_rollout.Rollout(nthread=nthread if nthread > 1 else 0) as r:
         t = time.perf_counter()
-        r.rollout([m] * episodes, datas, init, ctrl, skip_checks=True, nstep=nstep,
-                  state=state, sensordata=sens)
-        return episodes * nstep / (time.perf_counter() - t)
+        for _ in range(calls):
+            r.rollout(models, datas, init, ctrl, skip_checks=True, nstep=nstep, state=state,
+                      sensordata=sens, chunk_size=chunk_size)
+        return calls * episodes * nstep / (time.perf_counter() - t)
 
 
 def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None = None,

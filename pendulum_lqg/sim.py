@@ -297,6 +297,11 @@ class Simulator:
     def n(self) -> int:
         return self.x.shape[0]
 
+    @property
+    def nthread(self) -> int:
+        """Rollout threads (0 or 1: the calling thread)."""
+        return self._nthread
+
     def measure(self, rows: np.ndarray | None = None) -> np.ndarray:
         """Draw this period's noise and return the noisy measurement ``y = [p, θ] + v`` (n, 2).
 
@@ -352,7 +357,7 @@ class Simulator:
         else:
             cost = period_integrals(xs, u, fail_step, h=self.h, Qh=self.Qh, R=self.R)[2]
         self.t = self.t + self.dt
-        self.period += 1
+        self.period = self.period + 1
         self.x = buf[:, k + 1].copy()
         return StepResult(x=self.x, cost=cost, failed=failed, reason=reason, states=states)
 
@@ -376,8 +381,7 @@ class Simulator:
         if forces is not None:
             ctrl[:, :, 1:][:, :, self.plant.qvel_index] = forces
         state_out = self._state_out[:n]
-        # one chunk of rows per thread: the rows are equal work, and fewer chunks cost less
-        chunk = -(-n // self._nthread) if self._nthread > 1 else None
+        chunk = rollout_chunk(n, self._nthread)
         self._rollout.rollout(self._models if n == self._capacity else self._models[:n],
                               self._datas, init, ctrl, control_spec=self._control_spec,
                               skip_checks=True, nstep=self.k, state=state_out, chunk_size=chunk)
@@ -423,7 +427,7 @@ class Simulator:
         # path)
         p, th, v, w = np.abs(buf[:, 1:]).max(axis=(0, 1)).tolist()
         if th <= sc.theta_max and p < self.track and v <= RUNAWAY and w <= RUNAWAY \
-                and not reset_flag.any():
+                and not np.count_nonzero(reset_flag):
             return failed, reason, None
         states, x_end = buf[:, 1:k + 1], buf[:, k + 1]
         with np.errstate(invalid="ignore"):
@@ -444,6 +448,13 @@ class Simulator:
                                    np.where(pole[idx, s], FAIL_POLE, FAIL_TRACK))
             return failed, reason, fail_step
         return failed, reason, None
+
+
+def rollout_chunk(n: int, nthread: int) -> int | None:
+    """``chunk_size`` for a ``Rollout`` of ``n`` rows of one control period on ``nthread``
+    threads: one chunk of rows per thread (the rows are equal work, and fewer chunks cost less
+    than ``mujoco.rollout``'s default of about ten per thread)."""
+    return -(-n // nthread) if nthread > 1 else None
 
 
 def _cpu_count() -> int:
