@@ -70,7 +70,7 @@ def main() -> None:
             rates[name].append(n * args.steps / time_steps(envs, agent, args.steps, seed=r))
         rates["physics"].append(raw_rollout_rate(native.unwrapped.plant, n, k, nthread,
                                                  calls=args.steps,
-                                                 chunk_size=rollout_chunk(n, nthread)) / k)
+                                                 chunk_size=rollout_chunk(n, nthread, k)) / k)
     best = {name: max(v) for name, v in rates.items()}
     for name, label in (("native", "native vector env"), ("sync", "SyncVectorEnv"),
                         ("physics", "physics only (bare rollout)")):
