@@ -242,6 +242,7 @@ class Simulator:
         self._init_buf = np.zeros((n, self._nstate))     # only the x columns are ever written
         # one period of each row: x at the start | the k physics states | x at the end
         self._period_buf = np.empty((n, self.k + 2, 4))
+        self._scratch = np.empty((n, self.k + 1, 4))     # |x| / limit of the failure check
 
     # ---- episodes ----------------------------------------------------------------------------
     def reset(self, generators: list[np.random.Generator], *, ids: np.ndarray | None = None,
@@ -357,7 +358,7 @@ class Simulator:
             cost = self.metrics.accumulate(self.ids, xs, u, x_hat, failed, reason, fail_step,
                                            self.t)
         else:
-            cost = period_integrals(xs, u, fail_step, h=self.h, Qh=self.Qh, R=self.R)[3]
+            cost = period_integrals(xs, u, fail_step, h=self.h, Qh=self.Qh, R=self.R)[2]
         self.t = self.t + self.dt
         self.period = self.period + 1
         self.x = buf[:, k + 1].copy()
@@ -426,7 +427,7 @@ class Simulator:
         # fast path, the common case: every |x_i| / limit_i below 1 − 1e-12 (the end state too, a
         # stricter test than its own), so the full checks below would find no failure (numpy's
         # max keeps a nan, and a nan fails the comparison, so it takes the full path)
-        scaled = np.abs(buf[:, 1:])
+        scaled = np.abs(buf[:, 1:], out=self._scratch[:n])
         scaled *= self._inv_limits
         if scaled.max() < 1.0 - 1e-12 and not np.count_nonzero(reset_flag):
             return failed, reason, None
