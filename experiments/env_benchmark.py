@@ -10,7 +10,7 @@ the LQG agent (it balances, the common case); InvertedPendulum-v5 by zero force.
 
 Usage::
 
-    uv run python experiments/env_benchmark.py [--steps 20000] [--repeats 5]
+    uv run python experiments/env_benchmark.py [--steps 10000] [--repeats 7]
 """
 
 from __future__ import annotations
@@ -47,8 +47,8 @@ def time_steps(env: gym.Env, steps: int, policy: object | None, seed: int) -> fl
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--steps", type=int, default=20000, help="env steps per timed run")
-    ap.add_argument("--repeats", type=int, default=5, help="rounds (one timed run per env each)")
+    ap.add_argument("--steps", type=int, default=10000, help="env steps per timed run")
+    ap.add_argument("--repeats", type=int, default=7, help="rounds (one timed run per env each)")
     args = ap.parse_args()
 
     ours = gym.make(pendulum_lqg.ENV_ID)

@@ -158,7 +158,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--episodes", type=_positive_int, default=1024)
     p.add_argument("--duration", type=_number, default=2.0, help="seconds simulated per episode")
     p.add_argument("--nthread", type=_nonneg_int, default=None)
-    p.add_argument("--repeats", type=_positive_int, default=3)
+    p.add_argument("--repeats", type=_positive_int, default=5,
+                   help="raw / closed-loop pairs, alternating (medians are compared)")
     p.add_argument("--memory", action="store_true",
                    help="also measure peak memory of 1000-episode benches of 2 s and 10 s")
     p.add_argument("--json", action="store_true")
