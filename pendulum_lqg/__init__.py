@@ -19,8 +19,7 @@ __all__ = ["ENV_ID", "register_envs"]
 #: The Gymnasium id of the cart-pole LQG environment (:class:`pendulum_lqg.env.CartPoleLQGEnv`).
 ENV_ID = "pendulum_lqg/CartPoleLQG-v0"
 
-# The registered defaults of the episode; ``max_episode_steps`` derives from them, and
-# ``tests/test_env.py`` checks they are the env's own defaults.
+# The registered defaults of the episode (``tests/test_env.py`` checks they are the env's own).
 _DEFAULT_DURATION = 10.0
 _DEFAULT_CONTROL_PERIOD = 0.01
 
@@ -29,6 +28,10 @@ def register_envs() -> None:
     """Register :data:`ENV_ID` (single and vector entry points) with Gymnasium, once.
 
     A behaviour change of the environment gets a new version here (``-v1``), never an edit of v0.
+
+    The entry point :func:`pendulum_lqg.env.make_env` wraps the env in its own ``TimeLimit`` of
+    ``duration / control_period`` steps, so ``max_episode_steps`` follows those keywords (a fixed
+    registered value would cut a longer episode short); hence no ``max_episode_steps`` here.
     """
     import gymnasium
 
@@ -36,9 +39,8 @@ def register_envs() -> None:
         return
     gymnasium.register(
         id=ENV_ID,
-        entry_point="pendulum_lqg.env:CartPoleLQGEnv",
+        entry_point="pendulum_lqg.env:make_env",
         vector_entry_point="pendulum_lqg.env:CartPoleLQGVectorEnv",
-        max_episode_steps=round(_DEFAULT_DURATION / _DEFAULT_CONTROL_PERIOD),
         kwargs={"duration": _DEFAULT_DURATION, "control_period": _DEFAULT_CONTROL_PERIOD},
     )
 

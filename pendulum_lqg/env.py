@@ -24,6 +24,7 @@ from gymnasium import spaces
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
+from gymnasium.wrappers import TimeLimit
 
 from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
 from pendulum_lqg.metrics import FAIL_NONE, FAIL_REASONS
@@ -219,9 +220,11 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     - Termination (failure, the benchmark's rule): `|θ| > theta_max` (default 0.5 rad), the cart at
       the end of the track (`|p| ≥ 2.4 m`, the slider `range`), or a non-finite / runaway state —
       checked at every physics step.
-    - Truncation: after `duration` seconds (default 10 s = 1000 steps), i.e. an episode survives
-      the benchmark's horizon; the env truncates itself at its own duration (the registered
-      `max_episode_steps`, 1000, is that of the default duration).
+    - Truncation: after `duration` seconds, `round(duration / control_period)` steps (default
+      10 s = 1000 steps): the benchmark's horizon. `gymnasium.make` wraps the env in a `TimeLimit`
+      of exactly that many steps, so `env.spec.max_episode_steps` follows `duration` and
+      `control_period`; the env also truncates itself there when built directly. As with
+      `TimeLimit`, a step that fails on the last step is both terminated and truncated.
 
     ## Arguments
     `gymnasium.make("pendulum_lqg/CartPoleLQG-v0", **kwargs)`, all keywords optional:
@@ -330,7 +333,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
             obs = self._noise_free_observation()
         else:
             obs = self._observe()
-        truncated = not failed and int(sim.period[0]) >= sim.n_periods
+        truncated = int(sim.period[0]) >= sim.n_periods         # TimeLimit's rule
         return obs, reward, failed, truncated, self._info(cost, int(res.reason[0]))
 
     def _observe(self) -> np.ndarray:
@@ -402,6 +405,14 @@ def _image_size(plant: Plant, width: int, height: int) -> tuple[int, int]:
     return width, height
 
 
+def make_env(**kwargs: Any) -> gym.Env[np.ndarray, np.ndarray]:
+    """The entry point of ``pendulum_lqg/CartPoleLQG-v0``: a :class:`CartPoleLQGEnv` (keywords as
+    its own) inside a ``TimeLimit`` of its episode length, ``round(duration / control_period)``
+    steps — ``max_episode_steps`` derived from the keywords, not fixed at registration."""
+    env = CartPoleLQGEnv(**kwargs)
+    return TimeLimit(env, max_episode_steps=env.max_episode_steps)
+
+
 class CartPoleLQGVectorEnv(VectorEnv):
     """``num_envs`` :class:`CartPoleLQGEnv` episodes stepped together on one batched sim core.
 
@@ -420,8 +431,10 @@ class CartPoleLQGVectorEnv(VectorEnv):
     Parameters
     ----------
     num_envs : number of sub-envs
-    max_episode_steps : truncate after this many steps (``make_vec`` passes the registered
-        value); the env's own ``duration`` also truncates, whichever comes first
+    max_episode_steps : truncate after this many steps (``gym.make_vec(id, N,
+        max_episode_steps=M)`` passes it); the env's own ``duration`` also truncates, whichever
+        comes first (``TimeLimit``'s rule: a sub-env that fails on its last step is both
+        terminated and truncated)
     nthread : rollout threads (default: the CPU cores, at most 8); results do not depend on it
     the other keywords : as :class:`CartPoleLQGEnv`
     """
@@ -504,7 +517,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
         res = sim.step(_action_force(actions, n))
         self._running_cost += res.cost
         terminated = res.failed
-        truncated = ~terminated & (sim.period >= self.max_episode_steps)
+        truncated = sim.period >= self.max_episode_steps          # TimeLimit's rule
         reward = step_reward(res.cost, terminated, self._scale_dt)
         obs = np.empty((n, self.single_observation_space.shape[0]))
         alive = np.nonzero(~terminated)[0]
@@ -566,4 +579,4 @@ class CartPoleLQGVectorEnv(VectorEnv):
 
 
 __all__ = ["CAMERA_DISTANCE_POLE_LENGTHS", "DEFAULT_REWARD_SCALE", "CartPoleLQGEnv",
-           "CartPoleLQGVectorEnv", "EnvConfig", "step_reward"]
+           "CartPoleLQGVectorEnv", "EnvConfig", "make_env", "step_reward"]

@@ -91,20 +91,23 @@ def assert_rollouts_equal(a: dict[str, list], b: dict[str, list]) -> None:
 
 
 # ---- registration ---------------------------------------------------------------------------------
-def test_registered_with_episode_length_from_the_env_defaults():
+def test_registered_with_episode_length_derived_from_duration_and_period():
     spec = gym.spec(ID)
     env = gym.make(ID)
     base = env.unwrapped
     assert isinstance(base, CartPoleLQGEnv)
-    assert spec.max_episode_steps == base.max_episode_steps == Scenario().n_periods == 1000
+    assert env.spec.max_episode_steps == base.max_episode_steps == Scenario().n_periods == 1000
     assert spec.kwargs == {"duration": Scenario().duration,
                            "control_period": Scenario().control_period}
     assert spec.vector_entry_point == "pendulum_lqg.env:CartPoleLQGVectorEnv"
-    # a shorter episode truncates itself at its own duration
-    short = gym.make(ID, duration=0.05, noise_scale=0.0)
-    short.reset(seed=0)
-    truncs = [short.step(np.zeros(1))[3] for _ in range(5)]
-    assert truncs == [False] * 4 + [True]
+    # the time limit follows the keywords: 20 s at 10 ms, 10 s at 20 ms, 0.05 s at 10 ms
+    assert gym.make(ID, duration=20.0).spec.max_episode_steps == 2000
+    assert gym.make(ID, control_period=0.02).spec.max_episode_steps == 500
+    for duration, steps in ((0.05, 5), (12.5, 1250)):
+        ep = gym.make(ID, duration=duration, noise_scale=0.0, x0=(0.0, 0.0, 0.0, 0.0))
+        ep.reset(seed=0)
+        truncs = [ep.step(np.zeros(1))[3] for _ in range(steps)]
+        assert truncs == [False] * (steps - 1) + [True]
 
 
 def test_registration_is_lazy_and_module_form_needs_no_import():
