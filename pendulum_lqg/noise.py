@@ -131,11 +131,12 @@ class NoiseStream:
             self.proc_std = s * np.sqrt(np.asarray(noise.process_density) / h)    # f per step
         self.meas_std = s * np.sqrt(np.asarray(noise.measurement_variance))
         self.enabled = bool(s > 0 and (np.any(self.proc_std > 0) or np.any(self.meas_std > 0)))
-        # std of each process column of a period (force noise: [slider, hinge] per physics step)
-        self._proc_scale = np.tile(self.proc_std, self.n_proc // self.proc_std.size)
+        # std of each column of a period: process (force noise: [slider, hinge] per physics
+        # step), then measurement
+        self._scale = np.concatenate([np.tile(self.proc_std, self.n_proc // self.proc_std.size),
+                                      self.meas_std])
         self._gens: list[np.random.Generator] = []
-        self._proc = np.zeros((0, CHUNK_PERIODS, self.n_proc))
-        self._meas = np.zeros((0, CHUNK_PERIODS, 2))
+        self._block = np.zeros((0, CHUNK_PERIODS, self.width))
         self._pos = np.zeros(0, dtype=np.int64)
         self._cursor: int | None = CHUNK_PERIODS     # the common position, or None (per row)
 
@@ -148,8 +149,7 @@ class NoiseStream:
         if rows is None:
             self._gens = list(generators)
             n = len(generators)
-            self._proc = np.zeros((n, CHUNK_PERIODS, self.n_proc))
-            self._meas = np.zeros((n, CHUNK_PERIODS, 2))
+            self._block = np.zeros((n, CHUNK_PERIODS, self.width))
             self._pos = np.full(n, CHUNK_PERIODS, dtype=np.int64)
             self._cursor = CHUNK_PERIODS
         else:
@@ -165,9 +165,9 @@ class NoiseStream:
             self._cursor = None
 
     def _refill(self, r: int) -> None:
-        z = self._gens[r].standard_normal((CHUNK_PERIODS, self.width))
-        np.multiply(z[:, : self.n_proc], self._proc_scale, out=self._proc[r])
-        np.multiply(z[:, self.n_proc:], self.meas_std, out=self._meas[r])
+        block = self._block[r]
+        self._gens[r].standard_normal(out=block)
+        block *= self._scale
 
     def draw(self, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The next period's noise of each row (default: every row), in physical units.
@@ -186,7 +186,8 @@ class NoiseStream:
                     self._refill(r)
                 c = 0
             self._cursor = c + 1
-            return self._proc[:, c], self._meas[:, c]
+            z = self._block[:, c]
+            return z[:, : self.n_proc], z[:, self.n_proc:]
         self._per_row()
         rows = np.arange(self.n) if rows is None else np.asarray(rows)
         for r in rows[self._pos[rows] >= CHUNK_PERIODS].tolist():
@@ -194,24 +195,24 @@ class NoiseStream:
             self._pos[r] = 0
         pos = self._pos[rows]
         self._pos[rows] += 1
-        return self._proc[rows, pos], self._meas[rows, pos]
+        z = self._block[rows, pos]
+        return z[:, : self.n_proc], z[:, self.n_proc:]
 
     def select(self, rows: np.ndarray) -> None:
         """Keep only these rows (their generators and undrawn blocks).
 
         ``rows`` is increasing, so the blocks are compacted in place: dropping finished episodes
-        never allocates a second copy of the (largest) noise buffers.
+        never allocates a second copy of the (largest) noise buffer.
         """
         rows = np.asarray(rows)
         self._gens = [self._gens[r] for r in rows]
         if rows.size > 1 and np.any(np.diff(rows) <= 0):
-            self._proc, self._meas = self._proc[rows], self._meas[rows]   # not increasing: copy
+            self._block = self._block[rows]          # not increasing: plain copy
         else:
             for i, r in enumerate(rows.tolist()):
                 if i != r:
-                    self._proc[i] = self._proc[r]
-                    self._meas[i] = self._meas[r]
-            self._proc, self._meas = self._proc[: rows.size], self._meas[: rows.size]
+                    self._block[i] = self._block[r]
+            self._block = self._block[: rows.size]
         self._pos = self._pos[rows]
 
     def forces(self, w: np.ndarray) -> np.ndarray:
