@@ -52,8 +52,9 @@ def main() -> None:
     ok = np.array(success)
     lo, hi = wilson_interval(int(ok.sum()), ok.size)
     mean, se = mean_se(np.array(cost)[ok])          # as bench: J over the successful episodes
+    j = f"{mean:.6g} ± {se:.2g}" if ok.any() else "– (no successful episode)"
     print(f"{agent.name}, {args.episodes} episodes, seed {args.seed}: success "
-          f"{ok.mean():.1%} (95% CI {lo:.1%}–{hi:.1%}), mean J {mean:.6g} ± {se:.2g}")
+          f"{ok.mean():.1%} (95% CI {lo:.1%}–{hi:.1%}), mean J {j}")
 
     if args.check:
         from pendulum_lqg.metrics import summarize
@@ -65,8 +66,9 @@ def main() -> None:
         same = all(r["success"] == s and r["cost"] == c
                    for r, s, c in zip(res.rows, success, cost, strict=True))
         summary = summarize(res.rows)
+        bench_j = f"{summary['cost']['mean']:.6g}" if ok.any() else "–"
         print(f"run_episodes (bench): success {summary['success_rate']:.1%}, mean J "
-              f"{summary['cost']['mean']:.6g}; identical episode by episode: {same}")
+              f"{bench_j}; identical episode by episode: {same}")
 
 
 if __name__ == "__main__":

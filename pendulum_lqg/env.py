@@ -43,6 +43,10 @@ CAMERA_DISTANCE_POLE_LENGTHS = 3.0
 #: policy runs at ≈ 3.4 J/s, the full-state LQR at ≈ 0.18 J/s).
 DEFAULT_REWARD_SCALE = 10.0
 
+#: The smallest reward of a step that survives: the smallest normal float, where ``exp`` of a
+#: very large cost would underflow to the failure reward 0.
+REWARD_FLOOR = float(np.finfo(np.float64).smallest_normal)
+
 
 def _positive(name: str, value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer) \
@@ -106,8 +110,8 @@ class EnvConfig:
         if model_path is not None and not isinstance(model_path, str):
             raise ConfigError(f"model_path: expected a path string, got {model_path!r}")
         scenario = Scenario(control_period=control_period, duration=duration, noise=noise,
-                            x0=tuple(x0), x0_std=tuple(x0_std), theta_max=theta_max,
-                            cost_Q=tuple(cost_Q), cost_R=cost_R, overrides=overrides)
+                            x0=x0, x0_std=x0_std, theta_max=theta_max,  # type: ignore[arg-type]
+                            cost_Q=cost_Q, cost_R=cost_R, overrides=overrides)  # type: ignore[arg-type]
         return cls(scenario=scenario, observation_mode=observation_mode,  # type: ignore[arg-type]
                    reward_scale=_positive("reward_scale", reward_scale), model_path=model_path)
 
@@ -120,12 +124,13 @@ class EnvConfig:
 
 def step_reward(cost: np.ndarray | np.float64, failed: np.ndarray | bool, scale_dt: float,
                 ) -> np.ndarray | float:
-    """``r = exp(−c / (s·T))`` for a period that survived, ``0`` for the period that failed.
+    """``r = exp(−c / (s·T))`` for a period that survived (at least :data:`REWARD_FLOOR`, so it is
+    always worth more than failing), ``0`` for the period that failed.
 
     One function for the single env (a scalar cost) and the vector env (arrays), so both give the
     same floats.
     """
-    r = np.exp(cost / -scale_dt)
+    r = np.maximum(np.exp(cost / -scale_dt), REWARD_FLOOR)
     if isinstance(r, np.ndarray):
         return np.where(failed, 0.0, r)
     return 0.0 if failed else float(r)
@@ -155,12 +160,12 @@ def _action_force(action: object, n: int) -> np.ndarray:
 class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     """
     ## Description
-    The MuJoCo cart-pole of ``models/cartpole.xml`` (a 1 kg cart on a ±2.4 m rail carrying a
+    The MuJoCo cart-pole of `models/cartpole.xml` (a 1 kg cart on a ±2.4 m rail carrying a
     uniform 1 m, 0.1 kg pole; a ±10 N motor) balanced upright under process and measurement noise:
     the stochastic LQG problem of the lecture, as a Gymnasium environment. It runs on the same
-    simulation core as ``pendulum-lqg run`` / ``bench`` — same plant, noise models, saturation,
+    simulation core as `pendulum-lqg run` / `bench` — same plant, noise models, saturation,
     failure rule and cost — so an agent is scored exactly as the benchmark scores its policies.
-    One step is one control period ``T`` (default 10 ms = 10 physics steps of 1 ms): the agent's
+    One step is one control period `T` (default 10 ms = 10 physics steps of 1 ms): the agent's
     force is held (zero-order hold) over the period.
 
     ## Action Space
@@ -191,16 +196,17 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     noise is never drawn, as in the benchmark).
 
     ## Rewards
-    With ``c`` the quadratic cost of the step, ``c = ∫ xᵀ diag(cost_Q) x + cost_R u² dt`` over the
+    With `c` the quadratic cost of the step, `c = ∫ xᵀ diag(cost_Q) x + cost_R u² dt` over the
     period (the benchmark's J, integrated at the physics step):
 
     - a step that does not fail: `r = exp(−c / (reward_scale · T))` ∈ (0, 1] — 1 at rest upright with
-      no force, e⁻¹ at a mean cost rate of `reward_scale` J/s;
+      no force, e⁻¹ at a mean cost rate of `reward_scale` J/s; never below the smallest normal
+      float (2.2e-308), where the exponential would underflow to 0;
     - the step in which the episode fails: `r = 0`, and the episode ends.
 
     Failing therefore never pays: from any state, failing now returns 0 while any continuation
     that does not fail returns more than 0. `info` carries the exact cost, so agents are compared
-    on J and success exactly as ``bench`` compares policies:
+    on J and success exactly as `bench` compares policies:
 
     | key            | value                                                            |
     |----------------|------------------------------------------------------------------|
@@ -253,7 +259,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     of `pole_mass`, `pole_length`, `cart_mass`, their `*_scale`, `force_limit`, `timestep`.
     [4] a side view (the XML's `side` camera direction) that tracks the cart at 3 pole lengths.
 
-    Invalid values raise :class:`~pendulum_lqg.errors.ConfigError` naming the parameter.
+    Invalid values raise `pendulum_lqg.errors.ConfigError` naming the parameter.
 
     ## Version History
     * v0: Initial version (the lecture scenario; reward `exp(−c/(s·T))`, 0 on failure).
@@ -491,20 +497,28 @@ class CartPoleLQGVectorEnv(VectorEnv):
 
     def reset(self, *, seed: int | Sequence[int] | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
-        """Reset every sub-env; ``seed``: an int ``s`` (sub-env i gets ``s + i``), a list of
-        ``num_envs`` seeds, or ``None``."""
+        """Reset every sub-env, as ``SyncVectorEnv`` resets its sub-envs.
+
+        ``seed``: an int ``s`` (sub-env i gets ``s + i``), a list of ``num_envs`` seeds (``None``
+        entries allowed), or ``None``. A sub-env without a seed continues its generator (fresh
+        entropy the first time), as a single env's ``reset()`` does.
+        """
         n = self.num_envs
+        seeds: list[int | None]
         if seed is None or isinstance(seed, int | np.integer):
             super().reset(seed=None if seed is None else int(seed))
-            seeds: list[int | None] = [None] * n if seed is None else \
-                [int(seed) + i for i in range(n)]
+            seeds = [None] * n if seed is None else [int(seed) + i for i in range(n)]
         else:
-            seeds = [int(s) for s in seed]
-            if len(seeds) != n:
-                raise ConfigError(f"seed: expected {n} seeds, got {len(seeds)}")
+            seeds = list(seed)
+            if len(seeds) != n or not all(s is None or (isinstance(s, int | np.integer)
+                                                        and not isinstance(s, bool))
+                                          for s in seeds):
+                raise ConfigError(f"seed: expected {n} integer seeds (or None), got {seed!r}")
         if options:
             raise ConfigError(f"options: unknown key {sorted(options)[0]!r}; reset takes none")
-        self._gens = [seeding.np_random(s)[0] for s in seeds]
+        self._gens = [seeding.np_random(None if s is None else int(s))[0]
+                      if s is not None or i >= len(self._gens) else self._gens[i]
+                      for i, s in enumerate(seeds)]
         self._sim.reset(self._gens, ids=self._all)
         self._running_cost = np.zeros(n)
         y = self._sim.measure()
@@ -578,5 +592,5 @@ class CartPoleLQGVectorEnv(VectorEnv):
         self._sim.close()
 
 
-__all__ = ["CAMERA_DISTANCE_POLE_LENGTHS", "DEFAULT_REWARD_SCALE", "CartPoleLQGEnv",
+__all__ = ["CAMERA_DISTANCE_POLE_LENGTHS", "DEFAULT_REWARD_SCALE", "REWARD_FLOOR", "CartPoleLQGEnv",
            "CartPoleLQGVectorEnv", "EnvConfig", "make_env", "step_reward"]

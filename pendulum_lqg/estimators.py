@@ -152,11 +152,14 @@ class TimeVaryingKalman(Estimator):
     r"""Time-varying discrete Kalman filter (current form) from an initial covariance ``M0``.
 
     .. math::
-        P_n = M_n - M_nC^T(CM_nC^T + V)^{-1}CM_n,\quad L_n = P_nC^TV^{-1},\quad
-        \hat x_n = \bar x_n + L_n(y_n - C\bar x_n),\quad M_{n+1} = \Phi P_n\Phi^T + Q_d
+        P_a = M_a - M_aC^T(CM_aC^T + V)^{-1}CM_a,\quad L_a = P_aC^TV^{-1},\quad
+        \hat x = \bar x + L_a(y - C\bar x),\quad M_{a+1} = \Phi P_a\Phi^T + Q_d
 
-    The covariance recursion does not depend on the data, so it is computed once per step for the
-    whole batch (all episodes start from the same ``M0`` at the same time).
+    where ``a`` is the number of samples since the episode started (``M_0 = M0``). The covariance
+    recursion does not depend on the data, so the ``(M_a, P_a, L_a)`` sequence is computed once, as
+    far as the oldest episode has got, and shared: rows that (re)start at different samples (a
+    vector env's autoresets) each use the entry of their own age. Attributes ``M``, ``P``, ``gain``
+    are those of the batch's age, or per row ``(n, …)`` while the rows' ages differ.
     """
 
     form = "current"
@@ -165,31 +168,58 @@ class TimeVaryingKalman(Estimator):
                  V: np.ndarray, M0: np.ndarray) -> None:
         super().__init__(Phi.shape[0])
         self.Phi, self.Gamma, self.C, self.Qd, self.V, self.M0 = Phi, Gamma, C, Qd, V, M0
-        self._new_episode()
+        self._M: list[np.ndarray] = [M0.copy()]          # M_a, P_a, L_a for a = 0, 1, …
+        self._P: list[np.ndarray] = []
+        self._L: list[np.ndarray] = []
+        self._age = np.zeros(0, dtype=np.int64)
+        self.M, self.P = M0.copy(), M0.copy()
+        self.gain = np.zeros((self.n_state, C.shape[0]))
 
-    def _new_episode(self) -> None:
-        self.M = self.M0.copy()
-        self.P = self.M0.copy()
-        self.gain = np.zeros((self.n_state, self.C.shape[0]))
+    def _covariances(self, a: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(M_a, P_a, L_a)``, extending the shared sequence as needed."""
+        C, n = self.C, self.n_state
+        while len(self._P) <= a:
+            M = self._M[len(self._P)]
+            S = C @ M @ C.T + self.V                                  # innovation covariance
+            L = np.linalg.solve(S, C @ M).T                           # L = M Cᵀ S⁻¹ = P Cᵀ V⁻¹
+            I_LC = np.eye(n) - L @ C
+            P = I_LC @ M @ I_LC.T + L @ self.V @ L.T                  # Joseph form
+            self._P.append(P)
+            self._L.append(L)
+            self._M.append(self.Phi @ P @ self.Phi.T + self.Qd)       # M⁺ = Φ P Φᵀ + Q_d
+        return self._M[a], self._P[a], self._L[a]
 
     def reset(self, x_hat0: np.ndarray, rows: np.ndarray | None = None) -> None:
-        if rows is not None and rows.size != self.x_hat.shape[0]:
-            raise ShapeError("rows: the time-varying Kalman filter shares its covariance across "
-                             "the batch and can only reset all episodes together")
-        super().reset(x_hat0)
-        self._new_episode()
+        super().reset(x_hat0, rows)
+        if rows is None:
+            self._age = np.zeros(self.x_hat.shape[0], dtype=np.int64)
+        else:
+            self._age[rows] = 0
 
     def estimate(self, y: np.ndarray) -> np.ndarray:
-        C, M, n = self.C, self.M, self.n_state
-        S = C @ M @ C.T + self.V                                      # innovation covariance
-        self.gain = np.linalg.solve(S, C @ M).T                       # L = M Cᵀ S⁻¹ = P Cᵀ V⁻¹
-        I_LC = np.eye(n) - self.gain @ C
-        self.P = I_LC @ M @ I_LC.T + self.gain @ self.V @ self.gain.T  # Joseph form
+        C = self.C
         self.x_prior = self._prior
         self.innovation = y - mv(C, self.x_prior)
-        self.x_hat = self.x_prior + mv(self.gain, self.innovation)
+        ages = np.unique(self._age)
+        if ages.size <= 1:                                  # the whole batch at one age
+            self.M, self.P, self.gain = self._covariances(int(ages[0]) if ages.size else 0)
+            self.x_hat = self.x_prior + mv(self.gain, self.innovation)
+            return self.x_hat
+        n = self._age.size
+        self.M, self.P = np.empty((n, *self.M0.shape)), np.empty((n, *self.M0.shape))
+        self.gain = np.empty((n, self.n_state, C.shape[0]))
+        self.x_hat = np.empty_like(self.x_prior)
+        for a in ages.tolist():                             # each age group with its own gain
+            rows = np.nonzero(self._age == a)[0]
+            M, P, L = self._covariances(a)
+            self.M[rows], self.P[rows], self.gain[rows] = M, P, L
+            self.x_hat[rows] = self.x_prior[rows] + mv(L, self.innovation[rows])
         return self.x_hat
 
     def update(self, u: np.ndarray) -> None:
         self._prior = mv(self.Phi, self.x_hat) + mv(self.Gamma, u)
-        self.M = self.Phi @ self.P @ self.Phi.T + self.Qd             # M⁺ = Φ P Φᵀ + Q_d
+        self._age += 1
+
+    def select(self, rows: np.ndarray) -> None:
+        super().select(rows)
+        self._age = self._age[rows]

@@ -69,6 +69,8 @@ class NoiseModel:
                            config_vector("measurement_variance", self.measurement_variance, 2,
                                          nonneg=True))
         try:
+            if isinstance(self.scale, bool):
+                raise TypeError("a bool is not a noise scale")
             scale = float(self.scale)
         except (TypeError, ValueError) as exc:
             raise ConfigError(f"noise_scale: expected a number ≥ 0, got {self.scale!r}") from exc

@@ -32,7 +32,7 @@ import numpy as np
 from mujoco import rollout as mj_rollout
 
 from pendulum_lqg._config import config_vector
-from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.linearize import steps_per_period
 from pendulum_lqg.metrics import (
     FAIL_DIVERGED,
@@ -376,7 +376,9 @@ class Simulator:
                          ) -> np.ndarray:
         """k physics steps of every row into ``out`` (n, k, 4); returns the rows MuJoCo reset."""
         n = self.n
-        assert self._rollout is not None
+        if self._rollout is None:
+            raise PendulumLQGError("simulator: closed (its rollout threads were released by "
+                                   "close()); make a new one")
         init = self._init_buf[:n]
         init[:, self._state_slice] = self.x
         ctrl = self._ctrl_buf[:n]

@@ -28,7 +28,7 @@ from gymnasium.utils.env_checker import check_env  # noqa: E402
 
 import pendulum_lqg  # noqa: E402
 from pendulum_lqg.agent import LQGAgent  # noqa: E402
-from pendulum_lqg.env import CartPoleLQGEnv, CartPoleLQGVectorEnv  # noqa: E402
+from pendulum_lqg.env import REWARD_FLOOR, CartPoleLQGEnv, CartPoleLQGVectorEnv  # noqa: E402
 from pendulum_lqg.errors import ConfigError, PendulumLQGError  # noqa: E402
 from pendulum_lqg.metrics import summarize  # noqa: E402
 from pendulum_lqg.plant import load_plant  # noqa: E402
@@ -211,6 +211,21 @@ def test_reward_is_exp_of_the_step_cost_and_zero_on_failure():
     env.reset(seed=1)
     _, r, _, _, info = env.step(np.zeros(1))
     assert r == pytest.approx(np.exp(-info["cost"] / (5.0 * 0.01)), rel=1e-15)
+    # ... never the failure reward, even where exp underflows (c / (s·T) ≈ 2.6e6 here)
+    tiny = gym.make(ID, reward_scale=1e-9)
+    tiny.reset(seed=1)
+    _, r, term, _, info = tiny.step(np.zeros(1))
+    assert not term and np.exp(-info["cost"] / (1e-9 * 0.01)) == 0.0
+    assert r == REWARD_FLOOR > 0.0
+
+
+def test_a_closed_env_says_so():
+    env = gym.make(ID)
+    env.reset(seed=0)
+    env.close()
+    env.reset(seed=0)
+    with pytest.raises(PendulumLQGError, match=r"^simulator: closed"):
+        env.step(np.zeros(1))
 
 
 @pytest.mark.parametrize(("kwargs", "param"), [
@@ -222,6 +237,10 @@ def test_reward_is_exp_of_the_step_cost_and_zero_on_failure():
     ({"process_noise": "force"}, "process_density"),
     ({"measurement_variance": [1.0, 2.0, 3.0]}, "measurement_variance"),
     ({"x0": (0.0, 0.1)}, "x0"),
+    ({"x0": None}, "x0"),
+    ({"x0_std": "wide"}, "x0_std"),
+    ({"cost_Q": None}, "cost_Q"),
+    ({"noise_scale": True}, "noise_scale"),
     ({"theta_max": 0.0}, "theta_max"),
     ({"reward_scale": 0.0}, "reward_scale"),
     ({"model_overrides": {"pole_weight": 1.0}}, "model override"),
@@ -371,6 +390,52 @@ def test_native_vector_env_equals_single_envs(kwargs):
     terms = np.array([s[2] for s in a[1:]])
     truncs = np.array([s[3] for s in a[1:]])
     assert terms.any() and truncs.any()
+
+
+@pytest.mark.parametrize("observer", OBSERVERS)
+def test_agent_on_native_vector_env_equals_agent_on_sync_env_through_autoresets(observer):
+    """Every observer (the time-varying Kalman filter too) restarts single sub-envs: the batched
+    agent on the native env acts exactly as on SyncVectorEnv's single envs."""
+    n = 4
+    cfg = {"duration": 0.3, "x0_std": (0.5, 0.3, 0.5, 0.5),
+           "observation_mode": "state" if observer == "none" else "measurement"}
+    native = gym.make_vec(ID, num_envs=n, **cfg)
+    sync = gym.make_vec(ID, num_envs=n, vectorization_mode="sync",
+                        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP}, **cfg)
+    runs = []
+    for envs in (native, sync):
+        agent = LQGAgent(native, observer=observer)
+        obs, _ = envs.reset(seed=3)
+        agent.reset()
+        actions, ends = [], 0
+        for _ in range(70):
+            a = agent.act(obs)
+            actions.append(a.copy())
+            obs, _, term, trunc, _ = envs.step(a)
+            ends += int((term | trunc).sum())
+            agent.reset(np.nonzero(term | trunc)[0])
+        runs.append((np.array(actions), ends))
+    np.testing.assert_array_equal(runs[0][0], runs[1][0])
+    assert runs[0][1] == runs[1][1] >= 2 * n          # sub-envs restarted at different steps
+
+
+def test_native_vector_env_unseeded_resets_continue_like_sync():
+    """reset() without a seed (or with None entries) continues each sub-env's generator."""
+    cfg = {"num_envs": 3, "x0_std": (0.1, 0.1, 0.0, 0.0)}
+    native = gym.make_vec(ID, **cfg)
+    sync = gym.make_vec(ID, vectorization_mode="sync",
+                        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP}, **cfg)
+    outs = []
+    for envs in (native, sync):
+        envs.reset(seed=7)
+        for _ in range(3):
+            envs.step(np.zeros((3, 1)))
+        o1, i1 = envs.reset()
+        o2, i2 = envs.reset(seed=[None, 4, None])
+        outs.append((o1, i1["state"], o2, i2["state"]))
+    for x, y in zip(*outs, strict=True):
+        np.testing.assert_array_equal(x, y)
+    assert not np.array_equal(outs[0][0], outs[0][2])
 
 
 def test_native_vector_env_seed_list_equals_single_env_resets():
