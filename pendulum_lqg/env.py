@@ -130,10 +130,10 @@ def step_reward(cost: np.ndarray | np.float64, failed: np.ndarray | bool, scale_
     One function for the single env (a scalar cost) and the vector env (arrays), so both give the
     same floats.
     """
-    r = np.maximum(np.exp(cost / -scale_dt), REWARD_FLOOR)
+    r = np.exp(cost / -scale_dt)
     if isinstance(r, np.ndarray):
-        return np.where(failed, 0.0, r)
-    return 0.0 if failed else float(r)
+        return np.where(failed, 0.0, np.maximum(r, REWARD_FLOOR))
+    return 0.0 if failed else max(float(r), REWARD_FLOOR)
 
 
 def _action_force(action: object, n: int) -> np.ndarray:
