@@ -6,7 +6,9 @@ has h = 1 ms and T = 10 ms (k = 10); InvertedPendulum-v5 gets ``frame_skip=k``. 
 ``env.step`` calls are timed (action selection and resets are outside the clock). The two envs
 take turns, one timed run each per round, so a change in machine load hits both alike; each env's
 figure is its best run, and the median of the per-round ratios is printed too. Our env is driven by
-the LQG agent (it balances, the common case); InvertedPendulum-v5 by zero force.
+the LQG agent (it balances, the common case); InvertedPendulum-v5 by zero force. A third line times
+the bare physics of our env step (one ``mujoco.rollout`` call of one row, no Python around it), the
+share of ``env.step`` no bookkeeping can remove.
 
 Usage::
 
@@ -23,6 +25,7 @@ import numpy as np
 
 import pendulum_lqg
 from pendulum_lqg.agent import LQGAgent
+from pendulum_lqg.perf import raw_rollout_rate
 
 
 def time_steps(env: gym.Env, steps: int, policy: object | None, seed: int) -> float:
@@ -65,10 +68,13 @@ def main() -> None:
     for r in range(args.repeats):
         for name, env, policy in contenders:
             runs[name].append(args.steps * k / time_steps(env, args.steps, policy, seed=r))
+        runs.setdefault("physics only", []).append(
+            raw_rollout_rate(ours.unwrapped.plant, 1, k, 0, calls=args.steps))
     for name, rates in runs.items():
         best = max(rates)
+        what = "bare mujoco.rollout of 1 row" if name == "physics only" else "env.step"
         print(f"{name:>20}: {best:12,.0f} physics steps/s "
-              f"({k / best * 1e6:6.1f} µs per env.step, {k} physics steps each)")
+              f"({k / best * 1e6:6.1f} µs per {what}, {k} physics steps each)")
     ratio = max(runs["CartPoleLQG-v0"]) / max(runs["InvertedPendulum-v5"])
     rounds = [a / b for a, b in zip(runs["CartPoleLQG-v0"], runs["InvertedPendulum-v5"], strict=True)]
     print(f"{'ratio':>20}: {ratio:.2f}× (CartPoleLQG-v0 / InvertedPendulum-v5, best runs; median of "
