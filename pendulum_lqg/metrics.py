@@ -36,43 +36,39 @@ EPISODE_FIELDS: tuple[str, ...] = (
 )
 
 
-def period_integrals(xs: np.ndarray, u: np.ndarray, fail_step: np.ndarray | None, *, h: float,
-                     Qh: np.ndarray, R: float,
-                     ) -> tuple[np.ndarray, float | np.ndarray, np.ndarray]:
+def period_integrals(z: np.ndarray, fail_step: np.ndarray | None, *, h: float,
+                     weights: np.ndarray) -> tuple[np.ndarray, float | np.ndarray, np.ndarray]:
     """The integrals of one control period — the one definition of the period's cost.
 
-    ``cost = Σ_j Σ_i (h·Q_i)·xs[j, i]² + (R·t_alive)·u²``: the rectangle rule at the physics
-    step h, with the state at the start of each physics step, up to and including the step in which
-    the episode failed.
+    With ``z = [x, u]`` at the start of each physics step and ``weights = h·[diag(Q), R]``,
+    ``cost = Σ_j Σ_i weights_i · z[j, i]²``: the rectangle rule at the physics step h for
+    ``∫ xᵀQx + R u² dt``, up to and including the step in which the episode failed.
 
     Parameters
     ----------
-    xs : (n, k, 4) state at the start of each physics step (the period's initial state, then the
-        states after physics steps 1 … k−1)
-    u : (n,) applied (saturated) force
+    z : (n, k, 5) ``[p, θ, ṗ, θ̇, u]`` at the start of each physics step: the period's initial
+        state, then the states after physics steps 1 … k−1; ``u`` the applied (saturated) force
     fail_step : ``None`` if no row failed, else (n,) first failing physics step (``k`` if none)
-    h : physics step; Qh : (4,) ``h·diag(Q)``; R : input weight
+    h : physics step; weights : (5,) ``h·[diag(Q), R]``
 
     Returns
     -------
-    xs : (n, k, 4) the states, zeroed after a row's failing step;
+    z : (n, k, 5) the same, zeroed after a row's failing step;
     t_alive : alive time in the period, a float (``k·h``) when no row failed, else (n,);
     cost : (n,) ``∫ xᵀ diag(Q) x + R u² dt`` over the alive part of the period
 
-    The sum is one ``einsum`` (no temporaries the size of ``xs``: at 1024 rows, allocating them
+    The sum is one ``einsum`` (no temporaries the size of ``z``: at 1024 rows, allocating them
     cost more than the arithmetic); its result for a row does not depend on the other rows.
     """
-    k = xs.shape[1]
+    k = z.shape[1]
     t_alive: float | np.ndarray
     if fail_step is None:
         t_alive = k * h
     else:
         mask = np.arange(k)[None, :] <= fail_step[:, None]                 # (n, k)
         t_alive = mask.sum(axis=1) * h
-        xs = np.where(mask[:, :, None], xs, 0.0)
-    cost = np.einsum("nki,nki,i->n", xs, xs, Qh)
-    cost += (R * t_alive) * u * u
-    return xs, t_alive, cost
+        z = np.where(mask[:, :, None], z, 0.0)
+    return z, t_alive, np.einsum("nki,nki,i->n", z, z, weights)
 
 
 class MetricsAccumulator:
@@ -83,7 +79,7 @@ class MetricsAccumulator:
 
     def __init__(self, n: int, sim: Simulator) -> None:
         self.h, self.k, self.dt = sim.h, sim.k, sim.dt
-        self.Qh, self.R, self.u_max = sim.Qh, sim.R, sim.u_max
+        self.weights, self.u_max = sim.weights, sim.u_max
         self.band = sim.scenario.settle_band
         self.duration = sim.n_periods * sim.dt
         self._alloc(max(n, 1))
@@ -118,14 +114,15 @@ class MetricsAccumulator:
         self.reason[ids] = FAIL_NONE
         self.done[ids] = False
 
-    def accumulate(self, ids: np.ndarray, xs: np.ndarray, u: np.ndarray,
+    def accumulate(self, ids: np.ndarray, z: np.ndarray, u: np.ndarray,
                    x_hat: np.ndarray | None, failed: np.ndarray, reason: np.ndarray,
                    fail_step: np.ndarray | None, t: np.ndarray) -> np.ndarray:
-        """Add one control period (``xs``, ``fail_step``: see :func:`period_integrals`); returns
-        the period's cost per row."""
+        """Add one control period (``z``, ``fail_step``: see :func:`period_integrals`; ``u`` (n,)
+        the applied force); returns the period's cost per row."""
         h, k = self.h, self.k
-        x_start = xs[:, 0]
-        xs, t_alive, cost = period_integrals(xs, u, fail_step, h=h, Qh=self.Qh, R=self.R)
+        x_start = z[:, 0, :4]
+        z, t_alive, cost = period_integrals(z, fail_step, h=h, weights=self.weights)
+        xs = z[:, :, :4]
         self.cost[ids] += cost
         self.alive[ids] += t_alive
         theta, p = xs[:, :, 1], xs[:, :, 0]

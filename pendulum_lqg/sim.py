@@ -176,10 +176,13 @@ class Simulator:
         self.track = plant.track_limit
         self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h)
         self.Q = np.asarray(scenario.cost_Q)
-        self.Qh = self.h * self.Q
-        #: 1 / [track, theta_max, RUNAWAY, RUNAWAY]: the failure check's fast path
-        self._inv_limits = 1.0 / np.array([self.track, scenario.theta_max, RUNAWAY, RUNAWAY])
         self.R = scenario.cost_R
+        #: h·[diag(Q), R]: the cost of a period is Σ weights·z² over its physics steps, z = [x, u]
+        self.weights = self.h * np.append(self.Q, self.R)
+        #: 1 / [track, theta_max, RUNAWAY, RUNAWAY, 2·u_max]: the failure check's fast path (a
+        #: saturated force passes it; a nan one does not)
+        self._inv_limits = 1.0 / np.array([self.track, scenario.theta_max, RUNAWAY, RUNAWAY,
+                                           2.0 * self.u_max])
         nstate, qpos_cols, qvel_cols = plant.physics_state_layout
         self._nstate = nstate
         self._cols = np.concatenate([qpos_cols, qvel_cols])
@@ -240,9 +243,10 @@ class Simulator:
         self._state_out = np.empty((n, self.k, self._nstate))
         self._ctrl_buf = np.zeros((n, self.k, self._ncontrol))
         self._init_buf = np.zeros((n, self._nstate))     # only the x columns are ever written
-        # one period of each row: x at the start | the k physics states | x at the end
-        self._period_buf = np.empty((n, self.k + 2, 4))
-        self._scratch = np.empty((n, self.k + 1, 4))     # |x| / limit of the failure check
+        # one period of each row, z = [x, u]: at the start | after each of the k physics steps |
+        # at the end (after state noise); u is held over steps 0 … k−1 and 0 after them
+        self._period_buf = np.zeros((n, self.k + 2, 5))
+        self._scratch = np.empty((n, self.k + 1, 5))     # |z| / limit of the failure check
 
     # ---- episodes ----------------------------------------------------------------------------
     def reset(self, generators: list[np.random.Generator], *, ids: np.ndarray | None = None,
@@ -340,8 +344,9 @@ class Simulator:
         # saturation (np.minimum/np.maximum: np.clip's values, at a fraction of its overhead)
         u = np.minimum(np.maximum(u, -self.u_max), self.u_max)
         buf = self._period_buf[:n]
-        buf[:, 0] = self.x
-        states = buf[:, 1:k + 1]
+        buf[:, 0, :4] = self.x
+        buf[:, :k, 4] = u[:, None]
+        states = buf[:, 1:k + 1, :4]
         forces = self.noise.forces(self._w) if self._force_noise else None
         if self.backend == "rollout":
             reset_flag = self._advance_rollout(u, forces, states)
@@ -349,19 +354,19 @@ class Simulator:
             reset_flag = self._advance_step(u, forces, states)
         # state noise: one jump per period at its end (x ← x + δx)
         if self._state_noise:
-            np.add(buf[:, k], self._w, out=buf[:, k + 1])
+            np.add(buf[:, k, :4], self._w, out=buf[:, k + 1, :4])
         else:
-            buf[:, k + 1] = buf[:, k]
+            buf[:, k + 1, :4] = buf[:, k, :4]
         failed, reason, fail_step = self._detect_failure(buf, reset_flag)
-        xs = buf[:, :k]
+        z = buf[:, :k]
         if self.metrics is not None:
-            cost = self.metrics.accumulate(self.ids, xs, u, x_hat, failed, reason, fail_step,
+            cost = self.metrics.accumulate(self.ids, z, u, x_hat, failed, reason, fail_step,
                                            self.t)
         else:
-            cost = period_integrals(xs, u, fail_step, h=self.h, Qh=self.Qh, R=self.R)[2]
+            cost = period_integrals(z, fail_step, h=self.h, weights=self.weights)[2]
         self.t = self.t + self.dt
         self.period = self.period + 1
-        self.x = buf[:, k + 1].copy()
+        self.x = buf[:, k + 1, :4].copy()
         return StepResult(x=self.x, cost=cost, failed=failed, reason=reason, states=states)
 
     def select(self, rows: np.ndarray) -> None:
@@ -417,9 +422,9 @@ class Simulator:
 
     def _detect_failure(self, buf: np.ndarray, reset_flag: np.ndarray,
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """Failure of each row in the period ``buf`` (n, k+2, 4) = [x start | k physics states |
-        x end]: ``failed``, the reason codes and the first failing physics step (``k`` if none),
-        or ``None`` for the latter when no row failed."""
+        """Failure of each row in the period ``buf`` (n, k+2, 5) = ``[x, u]`` at [the start | the
+        k physics steps | the end]: ``failed``, the reason codes and the first failing physics
+        step (``k`` if none), or ``None`` for the latter when no row failed."""
         sc = self.scenario
         n, k = self.n, self.k
         failed = np.zeros(n, dtype=bool)
@@ -433,7 +438,7 @@ class Simulator:
         scaled *= self._inv_limits
         if scaled.max() < 1.0 - 1e-12 and not np.count_nonzero(reset_flag):
             return failed, reason, None
-        states, x_end = buf[:, 1:k + 1], buf[:, k + 1]
+        states, x_end = buf[:, 1:k + 1, :4], buf[:, k + 1, :4]
         with np.errstate(invalid="ignore"):
             mag = np.abs(states)
             # ``not (|x| <= RUNAWAY)`` is true for nan, inf and runaway values alike
