@@ -55,8 +55,7 @@ def main() -> None:
     native = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n)
     sync = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n, vectorization_mode="sync",
                         vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP})
-    sim = native.unwrapped._sim
-    k, nthread = sim.k, sim.nthread
+    k, nthread = native.unwrapped.frame_skip, native.unwrapped.nthread
     # the sync env's sub-envs are plain single envs: the agent acts on the stacked batch
     agent = LQGAgent(native)
     contenders = {"native": native, "sync": sync}

@@ -477,6 +477,8 @@ class CartPoleLQGVectorEnv(VectorEnv):
         self.observation_mode = self.config.observation_mode
         self.plant, self._sim = self.config.make_simulator(nthread=nthread)
         self.dt, self.frame_skip = self._sim.dt, self._sim.k
+        #: rollout threads of the batched core
+        self.nthread = self._sim.nthread
         limit = self._sim.n_periods
         if max_episode_steps is not None:
             limit = min(limit, _positive_int("max_episode_steps", max_episode_steps))

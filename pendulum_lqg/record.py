@@ -60,6 +60,7 @@ import mujoco
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.jsonio import plain
 from pendulum_lqg.plant import CART_BODY, HINGE, POLE_BODY, SLIDER, STATE_NAMES, Plant
 
 if TYPE_CHECKING:
@@ -303,22 +304,6 @@ def _fmt(value: object) -> str:
     return str(value)
 
 
-def _jsonable(value: object) -> object:
-    if isinstance(value, Mapping):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, complex):
-        return _fmt(value)
-    if isinstance(value, Path):
-        return str(value)
-    return value
-
-
 def _flatten(data: object, prefix: str = "") -> dict[str, object]:
     """Nested mappings as ``{"a.b": value}`` (lists stay values)."""
     if not isinstance(data, Mapping):
@@ -352,7 +337,7 @@ def _config_markdown(plant: Plant, scenario: Scenario, policy: Policy,
     for title, data in (("Configuration", config), ("Scenario", scenario.to_dict())):
         lines += [f"## {title}", "", "| key | value |", "|---|---|"]
         lines += [f"| {k} | `{json.dumps(v, default=str)}` |"
-                  for k, v in _flatten(_jsonable(dict(data))).items()]
+                  for k, v in _flatten(plain(dict(data), nonfinite_as_string=True)).items()]
         lines.append("")
     lines += ["## Plant (read from the MJCF)", "", f"model: `{plant.path}`", "",
               "| parameter | value |", "|---|---|"]

@@ -175,10 +175,8 @@ class Simulator:
         self.u_max = plant.u_max
         self.track = plant.track_limit
         self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h)
-        self.Q = np.asarray(scenario.cost_Q)
-        self.R = scenario.cost_R
         #: h·[diag(Q), R]: the cost of a period is Σ weights·z² over its physics steps, z = [x, u]
-        self.weights = self.h * np.append(self.Q, self.R)
+        self.weights = self.h * np.append(scenario.cost_Q, scenario.cost_R)
         #: 1 / [track, theta_max, RUNAWAY, RUNAWAY, 2·u_max]: the failure check's fast path (a
         #: saturated force passes it; a nan one does not)
         self._inv_limits = 1.0 / np.array([self.track, scenario.theta_max, RUNAWAY, RUNAWAY,
