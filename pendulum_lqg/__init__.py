@@ -1,33 +1,52 @@
 """pendulum_lqg: LQG control of a MuJoCo cart-pole under noise — design, simulation, benchmark.
 
 Importing the package registers the Gymnasium environment :data:`ENV_ID` (``gymnasium.make``,
-``gymnasium.make_vec``) without importing Gymnasium or MuJoCo itself: if Gymnasium is already
-imported the ids are registered now, otherwise when Gymnasium is first imported. The
-``"pendulum_lqg:pendulum_lqg/CartPoleLQG-v0"`` form of ``gymnasium.make`` needs no prior import.
+``gymnasium.make_vec``), as Gymnasium 1.x environment packages do::
+
+    import gymnasium as gym
+    import pendulum_lqg
+
+    gym.register_envs(pendulum_lqg)       # optional: marks the import as used
+    env = gym.make(pendulum_lqg.ENV_ID)   # or gym.make("pendulum_lqg:pendulum_lqg/CartPoleLQG-v0")
+
+Registering imports Gymnasium (and numpy) but none of MuJoCo, python-control or the simulation
+core: those load when an environment is made. The one process that skips it is the
+``pendulum-lqg`` command itself, which never makes a Gymnasium env and whose ``--help`` must not wait
+for numpy (it can still call :func:`register_envs`).
+
+Public API (stable from 0.2.0; a change gets a version bump and a README note): :data:`ENV_ID`,
+:class:`PolicyContext` and the policy-plugin protocol (:mod:`pendulum_lqg.plugins`), the CLI flags,
+and the results schema (:data:`SCHEMA_VERSION`).
 """
 
 from __future__ import annotations
 
-import importlib.abc
-import importlib.machinery
-import importlib.util
 import sys
-from types import ModuleType
+from pathlib import PurePath
+from typing import TYPE_CHECKING, Any
 
-__all__ = ["ENV_ID", "register_envs"]
+__version__ = "0.2.0"
+__all__ = ["ENV_ID", "SCHEMA_VERSION", "PolicyContext", "__version__", "register_envs"]
 
 #: The Gymnasium id of the cart-pole LQG environment (:class:`pendulum_lqg.env.CartPoleLQGEnv`).
 ENV_ID = "pendulum_lqg/CartPoleLQG-v0"
+
+#: Version of the results schema (``summary.json``, ``episodes.csv``); see README "Results schema".
+SCHEMA_VERSION = 1
 
 # The registered defaults of the episode (``tests/test_env.py`` checks they are the env's own).
 _DEFAULT_DURATION = 10.0
 _DEFAULT_CONTROL_PERIOD = 0.01
 
+if TYPE_CHECKING:
+    from pendulum_lqg.plugins import PolicyContext
+
 
 def register_envs() -> None:
     """Register :data:`ENV_ID` (single and vector entry points) with Gymnasium, once.
 
-    A behaviour change of the environment gets a new version here (``-v1``), never an edit of v0.
+    Called when the package is imported. A behaviour change of the environment gets a new version
+    here (``-v1``), never an edit of v0.
 
     The entry point :func:`pendulum_lqg.env.make_env` wraps the env in its own ``TimeLimit`` of
     ``duration / control_period`` steps, so ``max_episode_steps`` follows those keywords (a fixed
@@ -45,39 +64,16 @@ def register_envs() -> None:
     )
 
 
-class _RegisteringLoader(importlib.abc.Loader):
-    """Gymnasium's own loader, followed by :func:`register_envs` once the module has run."""
+def __getattr__(name: str) -> Any:
+    if name == "PolicyContext":          # the plugin API, loaded on first use
+        from pendulum_lqg.plugins import PolicyContext
 
-    def __init__(self, inner: importlib.abc.Loader) -> None:
-        self._inner = inner
-
-    def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType | None:
-        return self._inner.create_module(spec)
-
-    def exec_module(self, module: ModuleType) -> None:
-        self._inner.exec_module(module)
-        register_envs()
-
-    def __getattr__(self, name: str) -> object:   # resource readers etc. of the real loader
-        return getattr(self._inner, name)
+        return PolicyContext
+    raise AttributeError(f"module 'pendulum_lqg' has no attribute {name!r}")
 
 
-class _RegisterOnGymnasiumImport(importlib.abc.MetaPathFinder):
-    """One-shot import hook: registers our ids right after ``import gymnasium``."""
+#: The ``pendulum-lqg`` console script: its process needs no Gymnasium registration.
+_CLI_PROCESS = PurePath(sys.argv[0]).name == "pendulum-lqg" if sys.argv else False
 
-    def find_spec(self, fullname: str, path: object = None, target: object = None,
-                  ) -> importlib.machinery.ModuleSpec | None:
-        if fullname != "gymnasium":
-            return None
-        if self in sys.meta_path:
-            sys.meta_path.remove(self)
-        spec = importlib.util.find_spec(fullname)
-        if spec is not None and spec.loader is not None:
-            spec.loader = _RegisteringLoader(spec.loader)
-        return spec
-
-
-if "gymnasium" in sys.modules:
+if not _CLI_PROCESS:
     register_envs()
-elif not any(isinstance(f, _RegisterOnGymnasiumImport) for f in sys.meta_path):
-    sys.meta_path.insert(0, _RegisterOnGymnasiumImport())

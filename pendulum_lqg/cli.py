@@ -112,8 +112,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="machine-readable output")
 
     p = sub.add_parser("run", help="run seeded noisy episodes of one policy and summarise them")
-    p.add_argument("--controller", choices=CONTROLLERS, default="dlqr")
-    p.add_argument("--observer", choices=OBSERVERS, default="kalman")
+    p.add_argument("--policy", default=None, metavar="NAME",
+                   help="the policy: a built-in 'controller+observer' (e.g. dlqr+kalman) or your "
+                        "own plugin MODULE:ATTR or path/to/file.py:ATTR, a factory taking a "
+                        "pendulum_lqg.PolicyContext (README: Benchmark your own controller); "
+                        "default dlqr+kalman")
+    p.add_argument("--controller", choices=CONTROLLERS, default=None,
+                   help="built-in controller (default dlqr); not with --policy")
+    p.add_argument("--observer", choices=OBSERVERS, default=None,
+                   help="built-in observer (default kalman); not with --policy")
     p.add_argument("--episodes", type=_positive_int, default=100)
     p.add_argument("--seed", type=_nonneg_int, default=0)
     p.add_argument("--duration", type=_number, default=10.0, help="episode length in s (default 10)")
@@ -194,6 +201,7 @@ def _cfg_error(msg: str) -> Exception:
 
 def _spec_from_args(args: argparse.Namespace, controller: str = "dlqr", observer: str = "kalman",
                     ) -> Any:
+    """The built-in designs' options (weights, observer poles) from the command line."""
     from pendulum_lqg.policy import DesignSpec
 
     kw: dict[str, Any] = {"controller": controller, "observer": observer}
@@ -334,22 +342,26 @@ def _print_design(d: dict[str, Any], plant: Any) -> None:
 def cmd_run(args: argparse.Namespace) -> int:
     from pendulum_lqg.metrics import summarize
     from pendulum_lqg.plant import load_plant
-    from pendulum_lqg.policy import design_policy
+    from pendulum_lqg.plugins import build_policy, is_plugin_ref, split_builtin
     from pendulum_lqg.sim import Scenario, run_episodes
 
+    if args.policy is not None and (args.controller or args.observer):
+        raise _cfg_error("--policy: give either --policy or --controller/--observer, not both")
+    name = args.policy or f"{args.controller or 'dlqr'}+{args.observer or 'kalman'}"
     plant = load_plant(args.model)
     noise = _noise_from_args(args, scale=args.noise_scale)
     scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,
                         x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0)
-    spec = _spec_from_args(args, args.controller, args.observer)
-    policy = design_policy(plant, scenario.control_period, noise, spec)
+    plugin = is_plugin_ref(name)
+    spec = _spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
+    policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)
     recording = args.record is not None or args.spawn
     res = run_episodes(plant, scenario, policy, seed=args.seed, episodes=range(args.episodes),
                        backend=args.backend, nthread=args.nthread, trajectory=recording)
     summary = summarize(res.rows)
     config = {"policy": policy.name, "seed": args.seed, "episodes": args.episodes,
               "backend": args.backend, "scenario": scenario.to_dict(),
-              "design": _dataclass_dict(spec), "model": str(plant.path)}
+              "design": None if plugin else _dataclass_dict(spec), "model": str(plant.path)}
     out = {"config": config, "success_rate": summary["success_rate"],
            "success_ci95": summary["success_ci95"], "summary": summary, "episodes": res.rows}
     if recording:
@@ -506,7 +518,7 @@ def _run_units(todo: list[Any], total: int, already: int, out: Any, run_unit: An
 
 def _record_bench(spec: Any, out: Any, summary: Any, record_dir: Any, nthread: Any) -> None:
     from pendulum_lqg.plant import load_plant
-    from pendulum_lqg.policy import design_policy
+    from pendulum_lqg.plugins import build_policy
     from pendulum_lqg.record import record_episodes, telling_episodes
     from pendulum_lqg.sim import run_episodes
 
@@ -521,14 +533,14 @@ def _record_bench(spec: Any, out: Any, summary: Any, record_dir: Any, nthread: A
         scenario, dspec = cfg.build()
         sim_plant = nominal if scenario.overrides.is_empty() else load_plant(
             overrides=scenario.overrides)
-        policy = design_policy(nominal, scenario.control_period, scenario.noise, dspec)
+        policy = build_policy(cfg.plugin, plant=nominal, scenario=scenario, spec=dspec)
         episodes = sorted(set(picks.values()))
         res = run_episodes(sim_plant, scenario, policy, seed=spec.seed, episodes=episodes,
                            nthread=nthread, trajectory=True)
         path = record_dir / f"{spec.name}_config{cfg.index:03d}.rrd"
         config = {"experiment": spec.name, "configuration": cfg.values, "seed": spec.seed,
                   "telling_episodes": picks, "scenario": scenario.to_dict(),
-                  "design": _dataclass_dict(dspec)}
+                  "design": None if cfg.plugin else _dataclass_dict(dspec)}
         record_episodes(res.trajectories, plant=sim_plant, scenario=scenario, policy=policy,
                         config=config, path=path, labels=picks)
         print(f"recorded {path} ({', '.join(f'{k}: {v}' for k, v in picks.items())})",

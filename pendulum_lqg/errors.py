@@ -22,3 +22,7 @@ class DesignError(PendulumLQGError):
 
 class ConfigError(PendulumLQGError):
     """A configuration value (CLI option, TOML key, env keyword, model override) is invalid."""
+
+
+class PluginError(PendulumLQGError):
+    """A user's policy plugin cannot be loaded or broke the policy protocol (names the plugin)."""

@@ -27,7 +27,8 @@ Analysis studies (not plain grids) add ``study = "margins"`` or ``study = "roa"`
 same name with the study's parameters; ``pendulum-lqg bench`` hands them to
 :func:`pendulum_lqg.analysis.studies.run_study`.
 
-Grid keys: ``policy`` ("controller+observer"), ``controller``, ``observer``, ``noise_scale``,
+Grid keys: ``policy`` ("controller+observer", or a user's plugin "MODULE:ATTR" /
+"path/to/file.py:ATTR", relative to the experiment file's folder), ``controller``, ``observer``, ``noise_scale``,
 ``control_period``, ``duration``, ``theta0``, ``estimate0``, ``discretization``,
 ``pole_mass_scale``, ``pole_length_scale``, ``cart_mass_scale``. Unknown keys anywhere are an error
 that lists the known ones.
@@ -68,7 +69,10 @@ MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))
 
 
 def experiments_dir() -> Path:
-    return Path(__file__).resolve().parent.parent / "experiments"
+    """The folder of the shipped experiment files (checkout ``experiments/`` or installed copy)."""
+    from pendulum_lqg.resources import data_dir
+
+    return data_dir("experiments")
 
 
 def _check_keys(where: str, table: dict[str, object], known: tuple[str, ...]) -> None:
@@ -84,7 +88,8 @@ class Configuration:
     """One point of the grid: everything needed to run its episodes.
 
     ``values`` are the grid values that define it (for tables); ``scenario``/``noise``/``design``/
-    ``model`` are the resolved tables, as plain data.
+    ``model`` are the resolved tables, as plain data; ``plugin`` names a user's policy (grid
+    ``policy = ["my_module:make"]``), which then replaces the built-in controller and observer.
     """
 
     index: int
@@ -93,6 +98,9 @@ class Configuration:
     noise: dict[str, object]
     design: dict[str, object]
     model: dict[str, object]
+    #: a user's policy plugin (``MODULE:ATTR`` or an absolute ``file.py:ATTR``) instead of the
+    #: built-in ``design`` controller/observer
+    plugin: str | None = None
 
     @property
     def label(self) -> str:
@@ -132,6 +140,8 @@ class ExperimentSpec:
     source: dict[str, object] = field(default_factory=dict)
     study: str | None = None
     study_params: dict[str, object] = field(default_factory=dict)
+    #: folder of the experiment file (relative plugin paths), not part of the fingerprint
+    base_dir: Path | None = None
 
     def with_overrides(self, *, episodes: int | None = None, seed: int | None = None,
                        ) -> ExperimentSpec:
@@ -140,7 +150,7 @@ class ExperimentSpec:
             src["episodes"] = episodes
         if seed is not None:
             src["seed"] = seed
-        return parse_spec(src, name=self.name)
+        return parse_spec(src, name=self.name, base_dir=self.base_dir)
 
     def units(self) -> list[WorkUnit]:
         out = []
@@ -186,14 +196,25 @@ def _as_int(where: str, value: object, minimum: int) -> int:
 
 
 def _grid_point(values: dict[str, object], base: dict[str, dict[str, object]],
-                ) -> dict[str, dict[str, object]]:
+                base_dir: Path | None = None,
+                ) -> tuple[dict[str, dict[str, object]], str | None]:
+    """The resolved tables of one grid point, and its plugin reference (``None``: built-in)."""
+    from pendulum_lqg.plugins import is_plugin_ref, load_factory, resolve_ref, split_builtin
+
     tables = {k: dict(v) for k, v in base.items()}
+    plugin = None
     for key, value in values.items():
         if key == "policy":
-            if not isinstance(value, str) or value.count("+") != 1:
+            if is_plugin_ref(value):  # type: ignore[arg-type]
+                load_factory(value, base_dir=base_dir)   # importable now, not mid-sweep
+                plugin = resolve_ref(value, base_dir)    # type: ignore[arg-type]
+                continue
+            try:
+                ctrl, obs = split_builtin(value)         # type: ignore[arg-type]
+            except ConfigError:
                 raise ConfigError(f"grid.policy: expected 'controller+observer' (e.g. "
-                                  f"'dlqr+kalman'), got {value!r}")
-            ctrl, obs = value.split("+")
+                                  f"'dlqr+kalman') or a plugin 'MODULE:ATTR' / "
+                                  f"'path/to/file.py:ATTR', got {value!r}") from None
             tables["design"]["controller"], tables["design"]["observer"] = ctrl, obs
         elif key in ("controller", "observer", "discretization"):
             tables["design"][key] = value
@@ -207,11 +228,16 @@ def _grid_point(values: dict[str, object], base: dict[str, dict[str, object]],
             tables["scenario"]["x0"] = x0
         else:  # model scales
             tables["model"][key] = value
-    return tables
+    return tables, plugin
 
 
-def parse_spec(data: dict[str, object], *, name: str = "experiment") -> ExperimentSpec:
-    """Validate an experiment mapping (as read from TOML)."""
+def parse_spec(data: dict[str, object], *, name: str = "experiment",
+               base_dir: Path | None = None) -> ExperimentSpec:
+    """Validate an experiment mapping (as read from TOML).
+
+    ``base_dir`` is the folder relative plugin files (``policy = ["my_ctrl.py:make"]``) are taken
+    from: the experiment file's own folder (then the current folder).
+    """
     _check_keys("experiment", data, TOP_KEYS)
     base = {
         "scenario": dict(data.get("scenario", {})),  # type: ignore[arg-type]
@@ -257,45 +283,52 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment") -> Experime
     combos = itertools.product(*[grid[k] for k in keys]) if keys else [()]  # type: ignore[index]
     for i, combo in enumerate(combos):
         values = dict(zip(keys, combo, strict=True))
-        tables = _grid_point(values, base)
-        cfg = Configuration(index=i, values=values, **tables)
+        tables, plugin = _grid_point(values, base, base_dir)
+        cfg = Configuration(index=i, values=values, plugin=plugin, **tables)
         cfg.validate()  # every configuration now, not in the middle of a sweep
         configs.append(cfg)
     return ExperimentSpec(name=str(data.get("name", name)), description=str(
         data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,
         configurations=tuple(configs), source=dict(data),
-        study=None if study is None else str(study), study_params=study_params)
+        study=None if study is None else str(study), study_params=study_params, base_dir=base_dir)
 
 
 def load_spec(name_or_path: str) -> ExperimentSpec:
-    """Load ``experiments/NAME.toml`` or a path to a TOML file."""
+    """Load a shipped experiment by name (``lecture``) or a TOML file by path.
+
+    A bare name (no suffix, no folder) is looked up among the shipped experiments first, then as
+    ``NAME.toml`` in the current folder; anything else is a path.
+    """
+    from pendulum_lqg.resources import experiment_names, experiment_path
+
     path = Path(name_or_path)
-    if not path.suffix:
-        candidate = experiments_dir() / f"{name_or_path}.toml"
-        if candidate.is_file():
-            path = candidate
+    if not path.suffix and len(path.parts) == 1:
+        shipped = experiment_path(name_or_path)
+        if shipped is not None:
+            path = shipped
+        elif Path(f"{name_or_path}.toml").is_file():
+            path = Path(f"{name_or_path}.toml")
     if not path.is_file():
-        known = sorted(p.stem for p in experiments_dir().glob("*.toml"))
         raise ConfigError(f"experiment: no file {name_or_path!r}; known experiments: "
-                          + ", ".join(known))
+                          + ", ".join(experiment_names()))
     try:
         data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"experiment: {path} is not valid TOML: {exc}") from exc
-    return parse_spec(data, name=path.stem)
+    return parse_spec(data, name=path.stem, base_dir=path.resolve().parent)
 
 
 def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, object]]:
     """Run one work unit; rows carry the configuration's grid values and index."""
     from pendulum_lqg.plant import load_plant
-    from pendulum_lqg.policy import design_policy
+    from pendulum_lqg.plugins import build_policy
     from pendulum_lqg.sim import run_episodes
 
     scenario, spec = unit.config.build()
     nominal = load_plant()
     simulated = load_plant(overrides=scenario.overrides) if not scenario.overrides.is_empty() \
         else nominal
-    policy = design_policy(nominal, scenario.control_period, scenario.noise, spec)
+    policy = build_policy(unit.config.plugin, plant=nominal, scenario=scenario, spec=spec)
     res = run_episodes(simulated, scenario, policy, seed=unit.seed,
                        episodes=range(unit.start, unit.stop), nthread=nthread)
     out = []

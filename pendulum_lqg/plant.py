@@ -32,12 +32,10 @@ SENSORS = ("cart_position", "pole_angle")
 
 
 def default_model_path() -> Path:
-    """Path of the bundled ``cartpole.xml`` (repository ``models/`` or the installed copy)."""
-    here = Path(__file__).resolve().parent
-    for candidate in (here.parent / "models" / "cartpole.xml", here / "models" / "cartpole.xml"):
-        if candidate.is_file():
-            return candidate
-    raise ConfigError("model: cannot find models/cartpole.xml next to the pendulum_lqg package")
+    """Path of the bundled ``cartpole.xml`` (the checkout's ``models/`` or the installed copy)."""
+    from pendulum_lqg.resources import model_path
+
+    return model_path()
 
 
 @dataclass(frozen=True)

@@ -101,6 +101,9 @@ class DesignSpec:
 class Policy:
     """``u = sat(−K x̂)`` with an estimator; vectorised over a batch.
 
+    A built-in policy follows the same protocol as a user's plugin (:mod:`pendulum_lqg.plugins`):
+    ``reset(n)``, ``act(y) -> u``, ``select(rows)``, ``needs_state``, ``x_hat``.
+
     Attributes
     ----------
     K : (1, 4) state-feedback gain
@@ -137,6 +140,11 @@ class Policy:
 
     def select(self, rows: np.ndarray) -> None:
         self.estimator.select(rows)
+
+    @property
+    def x_hat(self) -> np.ndarray:
+        """The estimate (n, 4) the controller used at the last sample (the protocol's ``x_hat``)."""
+        return self.estimator.x_hat
 
 
 def _emulated_observer(A: np.ndarray, B: np.ndarray, C: np.ndarray, L: np.ndarray, dt: float,

@@ -24,6 +24,7 @@ A failed episode stops; the rest of the batch continues.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -339,6 +340,11 @@ class Simulator:
         n, k = self.n, self.k
         if u.shape[0] != n:
             raise ConfigError(f"u: expected {n} forces, got {u.shape[0]}")
+        # a non-finite requested force (a policy that blew up) ends its episode as diverged at the
+        # start of the period; the physics of that row runs with 0 N (one sum is the fast check)
+        bad_u = None if math.isfinite(u.sum()) else ~np.isfinite(u)
+        if bad_u is not None:
+            u = np.where(bad_u, 0.0, u)
         # saturation (np.minimum/np.maximum: np.clip's values, at a fraction of its overhead)
         u = np.minimum(np.maximum(u, -self.u_max), self.u_max)
         buf = self._period_buf[:n]
@@ -356,6 +362,10 @@ class Simulator:
         else:
             buf[:, k + 1, :4] = buf[:, k, :4]
         failed, reason, fail_step = self._detect_failure(buf, reset_flag)
+        if bad_u is not None and bad_u.any():
+            failed = failed | bad_u
+            reason = np.where(bad_u, FAIL_DIVERGED, reason).astype(np.int8)
+            fail_step = np.where(bad_u, 0, k if fail_step is None else fail_step)
         z = buf[:, :k]
         if self.metrics is not None:
             cost = self.metrics.accumulate(self.ids, z, u, x_hat, failed, reason, fail_step,
@@ -557,6 +567,43 @@ class _TrajectoryLog:
         return out
 
 
+class _FixedBatch:
+    """A policy without ``select``: it keeps its whole original batch; rows of ended episodes get
+    zero measurements and their forces are dropped."""
+
+    def __init__(self, policy: object, n: int) -> None:
+        self.policy, self.n0, self.alive = policy, n, np.arange(n)
+        self.name = getattr(policy, "name", type(policy).__name__)
+
+    def act(self, y: np.ndarray) -> np.ndarray:
+        if self.alive.size == self.n0:
+            return np.asarray(self.policy.act(y), dtype=float).reshape(-1)   # type: ignore[attr-defined]
+        full = np.zeros((self.n0, y.shape[1]))
+        full[self.alive] = y
+        u = np.asarray(self.policy.act(full), dtype=float).reshape(-1)       # type: ignore[attr-defined]
+        return u[self.alive]
+
+    def select(self, rows: np.ndarray) -> None:
+        self.alive = self.alive[rows]
+
+    @property
+    def x_hat(self) -> np.ndarray | None:
+        est = getattr(self.policy, "x_hat", None)
+        return None if est is None else np.asarray(est)[self.alive]
+
+
+def _estimator_snapshot(policy: object, x_hat: np.ndarray | None, n: int,
+                        ) -> dict[str, np.ndarray]:
+    """The estimator intermediates a recording logs (nan where the policy has none)."""
+    est = getattr(policy, "estimator", None)
+    nan4 = np.full((n, 4), np.nan)
+    P = getattr(est, "P", None)
+    return {"x_hat": x_hat if x_hat is not None else nan4,
+            "x_prior": getattr(est, "x_prior", nan4),
+            "innovation": getattr(est, "innovation", np.full((n, 2), np.nan)),
+            "P": np.broadcast_to(P if P is not None else np.full((4, 4), np.nan), (n, 4, 4))}
+
+
 def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
                  episodes: list[int] | np.ndarray, backend: Literal["rollout", "step"] = "rollout",
                  nthread: int | None = None, trajectory: bool = False,
@@ -570,8 +617,10 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
     ----------
     plant : the simulated plant (possibly mismatched with the policy's design model)
     scenario : the control problem
-    policy : a :class:`~pendulum_lqg.policy.Policy` (``reset(n, x_hat0)``, ``act(y)``,
-        ``select(rows)``, ``needs_state``, ``estimator``)
+    policy : any policy of the protocol in :mod:`pendulum_lqg.plugins` — ``reset(n)`` (or
+        ``reset(n, x_hat0=…)`` when ``scenario.estimate0 == "true"``), ``act(y) -> u``, and
+        optionally ``select(rows)``, ``needs_state``, ``x_hat`` (for the estimation-error metrics)
+        and ``estimator`` (for recordings); built-in policies and plugins alike
     seed : the run's seed; episodes : episode numbers to run
     backend, nthread : see :class:`Simulator`
     trajectory : keep full trajectories (for recordings), not only the streamed metrics
@@ -585,20 +634,23 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
     log = _TrajectoryLog() if trajectory else None
     with Simulator(plant, scenario, backend=backend, nthread=nthread) as sim:
         x0 = sim.reset(gens, initial_states=initial_states)
-        policy.reset(n, x0.copy() if scenario.estimate0 == "true" else np.zeros((n, 4)))
-        est = policy.estimator
+        if scenario.estimate0 == "true":
+            policy.reset(n, x_hat0=x0.copy())
+        else:
+            policy.reset(n)
+        needs_state = bool(getattr(policy, "needs_state", False))
+        can_select = callable(getattr(policy, "select", None))
+        if not can_select:             # keep feeding the whole batch; use only the running rows
+            policy = _FixedBatch(policy, n)
         for _ in range(sim.n_periods):
             y = sim.measure()
             x_now = sim.x
-            u = policy.act(x_now if policy.needs_state else y)
+            u = policy.act(x_now if needs_state else y)
+            x_hat = getattr(policy, "x_hat", None)
             if log is not None:
-                P = getattr(est, "P", None)
-                P_rows = np.broadcast_to(P if P is not None else np.full((4, 4), np.nan),
-                                         (sim.n, 4, 4))
                 snap = dict(t=sim.t, x=x_now, y=y, u=np.clip(u, -sim.u_max, sim.u_max),
-                            x_hat=est.x_hat, x_prior=est.x_prior, innovation=est.innovation,
-                            P=P_rows)
-            res = sim.step(u, x_hat=est.x_hat)
+                            **_estimator_snapshot(policy, x_hat, sim.n))
+            res = sim.step(u, x_hat=x_hat)
             if log is not None:
                 log.add(sim.ids, cost=res.cost, states=res.states, **snap)
             if res.failed.any():

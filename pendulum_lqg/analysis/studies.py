@@ -194,6 +194,10 @@ def run_margins(spec: Any, out: Any, *, log: Log = None) -> dict[str, object]:
     from pendulum_lqg.policy import design_policy
 
     prm = spec.study_params
+    plugins = [cfg.values.get("policy") for cfg in spec.configurations if cfg.plugin is not None]
+    if plugins:
+        raise ConfigError(f"grid.policy: the margins study needs each policy's linear loop; a "
+                          f"plugin ({plugins[0]}) has none — run it with bench grids or roa")
     plant = load_plant()
     lin = linearize(plant)
     A, B, C = lin.A, lin.B, lin.C
@@ -303,7 +307,7 @@ def run_roa(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
     by a resumed run."""
     from pendulum_lqg.analysis.roa import bisect_theta, success_map
     from pendulum_lqg.plant import load_plant
-    from pendulum_lqg.policy import design_policy
+    from pendulum_lqg.plugins import build_policy
 
     prm = spec.study_params
     nominal = load_plant()
@@ -320,7 +324,7 @@ def run_roa(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
         scenario, dspec = cfg.build()
         simulated = nominal if scenario.overrides.is_empty() else load_plant(
             overrides=scenario.overrides)
-        policy = design_policy(nominal, scenario.control_period, scenario.noise, dspec)
+        policy = build_policy(cfg.plugin, plant=nominal, scenario=scenario, spec=dspec)
         bis = bisect_theta(simulated, scenario, policy, seed=spec.seed, episodes=spec.episodes,
                            level=prm["level"], theta_lo=prm["theta_lo"],
                            theta_hi=prm["theta_hi"], tolerance=prm["tolerance"], nthread=nthread)

@@ -1,0 +1,332 @@
+"""Bring your own controller: the policy protocol, :class:`PolicyContext` and plugin loading.
+
+Every policy the benchmark runs — the built-in LQG variants and a user's plugin alike — is built by
+one function, :func:`build_policy`, and driven by the simulation core through one protocol. A
+policy is a *batched* object::
+
+    policy.reset(n)          # n episodes start; the policy's estimate starts from its own prior (0)
+    u = policy.act(y)        # y (n, 2) = [p, θ] measured at the start of the period → u (n,) [N]
+    policy.select(rows)      # optional: keep only these rows (episodes that ended are dropped)
+    policy.needs_state       # optional, default False: True → act receives the true state (n, 4)
+    policy.x_hat             # optional: the (n, 4) estimate used at this sample (metrics: RMS x̂−x)
+
+``u`` is held over the control period and saturated by the core to the actuator range. A plugin is
+named ``MODULE:ATTR`` (an importable module) or ``path/to/file.py:ATTR``; ``ATTR`` is a factory
+called once per batch with a :class:`PolicyContext`, returning such an object.
+
+Rules the core enforces (documented in README "Benchmark your own controller"):
+
+* a plugin that raises, whose ``act`` returns the wrong shape, or that lacks ``reset``/``act`` stops
+  the run with a one-line :class:`~pendulum_lqg.errors.PluginError` naming the plugin (the CLI exits
+  2; work units already written stay on disk);
+* a non-finite force (nan, ±inf) ends that episode as ``diverged`` — a controller that blows up
+  numerically has failed the episode, the rest of the batch goes on;
+* without ``select`` the core keeps feeding the whole original batch (rows of ended episodes get
+  zero measurements and their forces are dropped), so a plugin may keep its own fixed-size state.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import importlib
+import importlib.util
+import inspect
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from pendulum_lqg.errors import ConfigError, PluginError
+
+if TYPE_CHECKING:
+    from pendulum_lqg.noise import NoiseModel
+    from pendulum_lqg.plant import Plant
+    from pendulum_lqg.policy import DesignSpec
+    from pendulum_lqg.sim import Scenario
+
+
+@runtime_checkable
+class BatchPolicy(Protocol):
+    """What the simulation core calls (``select``, ``needs_state`` and ``x_hat`` are optional)."""
+
+    def reset(self, n: int) -> None: ...
+
+    def act(self, y: np.ndarray) -> np.ndarray: ...
+
+
+@dataclass(frozen=True, eq=False)
+class PolicyContext:
+    """Everything a policy factory may design from: the nominal plant's models, noise and limits.
+
+    The models are those of the *nominal* plant (the XML without the scenario's mismatch overrides),
+    the same ones the built-in designs use.
+
+    Attributes
+    ----------
+    A : (4, 4), B : (4, 1), C : (2, 4)
+        Continuous linearisation about the upright, ``ẋ = Ax + Bu``, ``y = Cx``; state
+        ``x = [p, θ, ṗ, θ̇]``, input the cart force [N], output ``y = [p, θ]``.
+    Phi : (4, 4), Gamma : (4, 1)
+        Exact zero-order-hold discretisation at the control period ``dt``.
+    dt : float
+        Control period T [s]: ``act`` is called once per period and its force is held.
+    W : (4, 4)
+        Process-noise spectral density in state form (``G W_in Gᵀ``; units²·s): for the lecture's
+        state noise the state jumps by ``N(0, W·T)`` once per period.
+    V : (2, 2)
+        Measurement-noise covariance per sample [m², rad²].
+    u_max : float
+        Actuator limit [N]; forces are saturated to ``[−u_max, u_max]`` by the core.
+    Q : (4, 4), R : (1, 1)
+        Weights of the benchmark's cost ``J = ∫ xᵀQx + uᵀRu dt``.
+    plant : pendulum_lqg.plant.Plant
+        The nominal MuJoCo plant (advanced use: parameters, the compiled model).
+    noise : pendulum_lqg.noise.NoiseModel
+        The nominal noise model (``W``/``V`` above come from it).
+    G : (4, m)
+        Input matrix of the process noise (I₄ for state noise, the generalised-force map for
+        force noise).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    Phi: np.ndarray
+    Gamma: np.ndarray
+    dt: float
+    W: np.ndarray
+    V: np.ndarray
+    u_max: float
+    Q: np.ndarray
+    R: np.ndarray
+    plant: Plant
+    noise: NoiseModel
+    G: np.ndarray = field(repr=False, default_factory=lambda: np.eye(4))
+
+    @classmethod
+    def build(cls, plant: Plant, scenario: Scenario) -> PolicyContext:
+        """The context of ``plant`` (nominal) under ``scenario``'s period, noise and cost."""
+        from pendulum_lqg.linearize import discretize_zoh, linearize, steps_per_period
+        from pendulum_lqg.policy import noise_design_matrices
+
+        steps_per_period(plant, scenario.control_period)
+        lin = linearize(plant)
+        dt = float(scenario.control_period)
+        disc = discretize_zoh(lin, dt)
+        G, W_in = noise_design_matrices(lin, scenario.noise, dt)
+        return cls(A=lin.A, B=lin.B, C=lin.C, Phi=disc.Phi, Gamma=disc.Gamma, dt=dt,
+                   W=G @ W_in @ G.T, V=scenario.noise.V, u_max=plant.u_max,
+                   Q=np.diag(scenario.cost_Q), R=np.array([[scenario.cost_R]]), plant=plant,
+                   noise=scenario.noise, G=G)
+
+
+# ---- names ----------------------------------------------------------------------------------------
+def is_plugin_ref(name: str) -> bool:
+    """``MODULE:ATTR`` / ``file.py:ATTR`` (a plugin) rather than ``controller+observer``."""
+    return isinstance(name, str) and ":" in name
+
+
+def resolve_ref(ref: str, base_dir: Path | None = None) -> str:
+    """``ref`` with a relative ``file.py`` part made absolute (against ``base_dir`` if the file is
+    there, else the current folder), so a work unit finds the file wherever it runs; module refs
+    are returned unchanged."""
+    module, attr = _split(ref)
+    if not _is_path(module):
+        return ref
+    path = Path(module).expanduser()
+    if not path.is_absolute():
+        candidates = [base_dir / path] if base_dir is not None else []
+        candidates.append(Path.cwd() / path)
+        path = next((c for c in candidates if c.is_file()), candidates[0])
+    return f"{path.resolve()}:{attr}"
+
+
+def _split(ref: str) -> tuple[str, str]:
+    if not isinstance(ref, str) or ":" not in ref:
+        raise ConfigError(f"policy: expected 'controller+observer' or a plugin 'MODULE:ATTR' / "
+                          f"'path/to/file.py:ATTR', got {ref!r}")
+    module, _, attr = ref.rpartition(":")
+    if not module or not attr.isidentifier():
+        raise ConfigError(f"policy {ref!r}: expected 'MODULE:ATTR' or 'path/to/file.py:ATTR' with "
+                          "ATTR a Python name")
+    return module, attr
+
+
+def _is_path(module: str) -> bool:
+    return module.endswith(".py") or "/" in module or "\\" in module
+
+
+def load_factory(ref: str, *, base_dir: Path | None = None) -> Callable[[PolicyContext], Any]:
+    """Import the factory named by ``ref`` (``MODULE:ATTR`` or ``path/to/file.py:ATTR``).
+
+    A file is imported as a module of its own (under a name derived from its path, so two plugin
+    files of the same name do not collide). Errors are one-line :class:`PluginError` messages.
+    """
+    module_name, attr = _split(resolve_ref(ref, base_dir))
+    if _is_path(module_name):
+        path = Path(module_name)
+        if not path.is_file():
+            raise PluginError(f"policy {ref!r}: no file {path}")
+        digest = hashlib.sha256(str(path).encode()).hexdigest()[:10]
+        name = f"_pendulum_lqg_plugin_{path.stem}_{digest}"
+        module = sys.modules.get(name)
+        if module is None:
+            spec = importlib.util.spec_from_file_location(name, path)
+            if spec is None or spec.loader is None:
+                raise PluginError(f"policy {ref!r}: cannot import {path}")
+            module = importlib.util.module_from_spec(spec)
+            sys.modules[name] = module
+            try:
+                spec.loader.exec_module(module)
+            except Exception as exc:
+                del sys.modules[name]
+                raise PluginError(f"policy {ref!r}: importing {path} raised "
+                                  f"{_one_line(exc)}") from exc
+    else:
+        try:
+            module = importlib.import_module(module_name)
+        except Exception as exc:
+            raise PluginError(f"policy {ref!r}: cannot import module {module_name!r}: "
+                              f"{_one_line(exc)}") from exc
+    factory = getattr(module, attr, None)
+    if factory is None:
+        raise PluginError(f"policy {ref!r}: {module_name} has no attribute {attr!r}")
+    if not callable(factory):
+        raise PluginError(f"policy {ref!r}: {attr} is not callable (expected a factory taking a "
+                          "PolicyContext)")
+    return factory
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+# ---- the adapter the core drives ------------------------------------------------------------------
+class PluginPolicy:
+    """A user's policy behind the core's protocol: checks every call and names the plugin.
+
+    Attributes
+    ----------
+    name : the plugin reference as given
+    inner : the object the factory returned
+    needs_state : from ``inner`` (default False)
+    info : design data for reports and recordings (``inner.info`` if it is a dict)
+    select : present only if ``inner`` has one (otherwise the core keeps the whole batch)
+    """
+
+    def __init__(self, name: str, inner: object) -> None:
+        self.name = name
+        self.inner = inner
+        for method in ("reset", "act"):
+            if not callable(getattr(inner, method, None)):
+                raise PluginError(f"policy {name!r}: the factory returned {type(inner).__name__}, "
+                                  f"which has no {method}() method (expected reset(n) and act(y))")
+        needs = getattr(inner, "needs_state", False)
+        if not isinstance(needs, bool | np.bool_):
+            raise PluginError(f"policy {name!r}: needs_state must be True or False, got {needs!r}")
+        self.needs_state = bool(needs)
+        info = getattr(inner, "info", None)
+        self.info: dict[str, object] = dict(info) if isinstance(info, dict) else {}
+        if callable(getattr(inner, "select", None)):
+            self.select = self._select
+        try:
+            params = inspect.signature(inner.reset).parameters    # type: ignore[attr-defined]
+        except (TypeError, ValueError):
+            params = {}
+        self._reset_takes_x_hat0 = "x_hat0" in params
+
+    def _call(self, what: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+        try:
+            return fn(*args, **kwargs)
+        except PluginError:
+            raise
+        except Exception as exc:
+            raise PluginError(f"policy {self.name!r}: {what} raised {_one_line(exc)}") from exc
+
+    def reset(self, n: int, x_hat0: np.ndarray | None = None) -> None:
+        """Start ``n`` episodes (``x_hat0`` only for plugins whose ``reset`` takes it)."""
+        if x_hat0 is None:
+            self._call("reset", self.inner.reset, n)                   # type: ignore[attr-defined]
+        elif self._reset_takes_x_hat0:
+            self._call("reset", self.inner.reset, n, x_hat0=x_hat0)    # type: ignore[attr-defined]
+        else:
+            raise PluginError(f"policy {self.name!r}: estimate0 = 'true' needs "
+                              "reset(n, x_hat0=…); this plugin's reset takes only n")
+
+    def act(self, y: np.ndarray) -> np.ndarray:
+        """Forces (n,) for the rows of ``y``; shape and type checked, non-finite values kept (the
+        core ends those episodes as ``diverged``)."""
+        return self._check(self._call("act", self.inner.act, y), y.shape[0])  # type: ignore[attr-defined]
+
+    def _check(self, u: object, n: int) -> np.ndarray:
+        try:
+            arr = np.asarray(u, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise PluginError(f"policy {self.name!r}: act returned {type(u).__name__}; expected "
+                              f"an array of {n} forces in newtons, shape ({n},)") from exc
+        if arr.shape not in ((n,), (n, 1)):
+            raise PluginError(f"policy {self.name!r}: act returned shape {arr.shape}; expected "
+                              f"({n},) forces in newtons")
+        return arr.reshape(n)
+
+    def _select(self, rows: np.ndarray) -> None:
+        self._call("select", self.inner.select, rows)                  # type: ignore[attr-defined]
+
+    @property
+    def x_hat(self) -> np.ndarray | None:
+        """The plugin's current estimate (n, 4), if it exposes one of that shape."""
+        est = getattr(self.inner, "x_hat", None)
+        if est is None:
+            return None
+        est = np.asarray(est, dtype=float)
+        return est if est.ndim == 2 and est.shape[1] == 4 else None
+
+
+# ---- one way to build any policy ------------------------------------------------------------------
+def build_policy(name: str | None, *, plant: Plant, scenario: Scenario,
+                 spec: DesignSpec | None = None, base_dir: Path | None = None,
+                 context: PolicyContext | None = None) -> Any:
+    """The policy ``name`` for the nominal ``plant`` under ``scenario`` — built-in or plugin.
+
+    Parameters
+    ----------
+    name : ``"controller+observer"`` (a built-in, e.g. ``"dlqr+kalman"``), a plugin reference
+        ``MODULE:ATTR`` / ``path/to/file.py:ATTR``, or ``None`` for ``spec``'s own controller and
+        observer
+    plant : the nominal plant the design believes in (not the mismatched, simulated one)
+    scenario : period, nominal noise (its ``scale`` is ignored by designs) and cost weights
+    spec : weights and other design options of the built-ins (default :class:`DesignSpec`)
+    base_dir : folder that relative plugin file paths are taken from (an experiment file's folder)
+    context : a prebuilt :class:`PolicyContext` (saves re-linearising for many plugins)
+    """
+    from pendulum_lqg.policy import DesignSpec, design_policy
+
+    spec = spec or DesignSpec()
+    if name is not None and is_plugin_ref(name):
+        factory = load_factory(name, base_dir=base_dir)
+        ctx = context if context is not None else PolicyContext.build(plant, scenario)
+        try:
+            inner = factory(ctx)
+        except PluginError:
+            raise
+        except Exception as exc:
+            raise PluginError(f"policy {name!r}: the factory raised {_one_line(exc)}") from exc
+        return PluginPolicy(name, inner)
+    if name is not None:
+        controller, observer = split_builtin(name)
+        spec = dataclasses.replace(spec, controller=controller, observer=observer)
+    return design_policy(plant, scenario.control_period, scenario.noise, spec)
+
+
+def split_builtin(name: str) -> tuple[str, str]:
+    """``"dlqr+kalman"`` → ``("dlqr", "kalman")`` (validated by :class:`DesignSpec`)."""
+    if not isinstance(name, str) or name.count("+") != 1:
+        raise ConfigError(f"policy: expected 'controller+observer' (e.g. 'dlqr+kalman') or a "
+                          f"plugin 'MODULE:ATTR' / 'path/to/file.py:ATTR', got {name!r}")
+    controller, observer = name.split("+")
+    return controller, observer
