@@ -28,7 +28,8 @@ same name with the study's parameters; ``pendulum-lqg bench`` hands them to
 :func:`pendulum_lqg.analysis.studies.run_study`.
 
 Grid keys: ``policy`` ("controller+observer", or a user's plugin "MODULE:ATTR" /
-"path/to/file.py:ATTR", relative to the experiment file's folder), ``controller``, ``observer``, ``noise_scale``,
+"path/to/file.py:ATTR", relative to the experiment file's folder), ``controller``, ``observer``,
+``noise_scale``,
 ``control_period``, ``duration``, ``theta0``, ``estimate0``, ``discretization``,
 ``pole_mass_scale``, ``pole_length_scale``, ``cart_mass_scale``. Unknown keys anywhere are an error
 that lists the known ones.
