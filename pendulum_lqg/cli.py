@@ -362,7 +362,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     config = {"policy": policy.name, "seed": args.seed, "episodes": args.episodes,
               "backend": args.backend, "scenario": scenario.to_dict(),
               "design": None if plugin else _dataclass_dict(spec), "model": str(plant.path)}
-    out = {"config": config, "success_rate": summary["success_rate"],
+    from pendulum_lqg import SCHEMA_VERSION
+
+    out = {"schema_version": SCHEMA_VERSION, "config": config,
+           "success_rate": summary["success_rate"],
            "success_ci95": summary["success_ci95"], "summary": summary, "episodes": res.rows}
     if recording:
         from pendulum_lqg.record import record_episodes

@@ -4,8 +4,10 @@ Layout of a results folder::
 
     spec.json        the resolved experiment (with its fingerprint)
     units/KEY.csv    one file per finished work unit (written to a temp file, then renamed)
-    episodes.csv     every episode row with its configuration (assembled at the end)
-    summary.json     aggregates per configuration (success rate + Wilson CI, mean ± SE)
+    episodes.csv     every episode row with its configuration (assembled at the end); first
+                     column ``schema_version``
+    summary.json     aggregates per configuration (success rate + Wilson CI, mean ± SE), with
+                     ``schema_version`` (README "Results schema")
     summary.md       the same as a Markdown table
     meta.json        timestamps and machine facts (kept apart so the data files are byte-identical
                      for the same seed)
@@ -22,6 +24,7 @@ import shutil
 import time
 from pathlib import Path
 
+from pendulum_lqg import SCHEMA_VERSION
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.experiments import ExperimentSpec, WorkUnit
 from pendulum_lqg.metrics import summarize
@@ -148,7 +151,8 @@ class ResultsDir:
     def finalize(self, spec: ExperimentSpec, meta: dict[str, object]) -> dict[str, object]:
         """Assemble episodes.csv, summary.json, summary.md (and meta.json); return the summary."""
         rows = self.collect(spec)
-        atomic_write(self.path / "episodes.csv", rows_to_csv(rows))
+        atomic_write(self.path / "episodes.csv",
+                     rows_to_csv([{"schema_version": SCHEMA_VERSION, **r} for r in rows]))
         summary = summarize_configs(spec, rows)
         atomic_write(self.path / "summary.json",
                      json.dumps(summary, indent=2, sort_keys=True, default=str) + "\n")
@@ -169,7 +173,8 @@ def _pid_alive(pid: int) -> bool:
 
 
 def summarize_configs(spec: ExperimentSpec, rows: list[dict[str, object]]) -> dict[str, object]:
-    out: dict[str, object] = {"experiment": spec.name, "seed": spec.seed,
+    out: dict[str, object] = {"schema_version": SCHEMA_VERSION, "experiment": spec.name,
+                              "seed": spec.seed,
                               "episodes_per_config": spec.episodes, "configurations": []}
     for cfg in spec.configurations:
         mine = [r for r in rows if r["config"] == cfg.index]

@@ -144,9 +144,10 @@ def test_bench_writes_rows_summary_and_refuses_to_overwrite(tmp_path, capsys):
     out = tmp_path / "out"
     lines = (out / "episodes.csv").read_text().splitlines()
     assert len(lines) == 1 + 4 * 6
-    assert lines[0].startswith("config,policy,noise_scale,episode,seed,success,")
+    assert lines[0].startswith("schema_version,config,policy,noise_scale,episode,seed,success,")
+    assert all(line.startswith("1,") for line in lines[1:])
     summary = json.loads((out / "summary.json").read_text())
-    assert len(summary["configurations"]) == 4
+    assert len(summary["configurations"]) == 4 and summary["schema_version"] == 1
     assert "| dlqr+kalman | 1.0 |" in (out / "summary.md").read_text()
     capsys.readouterr()
     assert _bench(tmp_path) == 2
