@@ -131,16 +131,19 @@ def is_plugin_ref(name: str) -> bool:
 
 
 def resolve_ref(ref: str, base_dir: Path | None = None) -> str:
-    """``ref`` with a relative ``file.py`` part made absolute (against ``base_dir`` if the file is
-    there, else the current folder), so a work unit finds the file wherever it runs; module refs
+    """``ref`` with a relative ``file.py`` part made absolute, so a work unit finds the file
+    wherever it runs: the first of ``base_dir``, the current folder and the shipped experiments
+    folder (``plugin_example.py:make`` works from an installed package) that has it. Module refs
     are returned unchanged."""
     module, attr = _split(ref)
     if not _is_path(module):
         return ref
     path = Path(module).expanduser()
     if not path.is_absolute():
+        from pendulum_lqg.resources import data_dir
+
         candidates = [base_dir / path] if base_dir is not None else []
-        candidates.append(Path.cwd() / path)
+        candidates += [Path.cwd() / path, data_dir("experiments") / path]
         path = next((c for c in candidates if c.is_file()), candidates[0])
     return f"{path.resolve()}:{attr}"
 
