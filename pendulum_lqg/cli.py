@@ -144,6 +144,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="episodes per configuration (default: the file's)")
     p.add_argument("--seed", type=_nonneg_int, default=None, help="seed (default: the file's)")
     p.add_argument("--out", default=None, help="results folder (default results/<name>)")
+    p.add_argument("--model", default=None, metavar="XML",
+                   help="your own cart-pole MJCF (README: the model contract) instead of the "
+                        "experiment's model_file or the shipped models/cartpole.xml")
     p.add_argument("--force", action="store_true", help="overwrite an existing results folder")
     p.add_argument("--resume", action="store_true", help="complete an interrupted sweep")
     p.add_argument("--record", metavar="DIR", default=None,
@@ -429,7 +432,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from pendulum_lqg.experiments import load_spec, run_unit
     from pendulum_lqg.results import ResultsDir
 
-    spec = load_spec(args.experiment).with_overrides(episodes=args.episodes, seed=args.seed)
+    spec = load_spec(args.experiment).with_overrides(episodes=args.episodes, seed=args.seed,
+                                                     model_file=args.model)
     out = ResultsDir(args.out or Path("results") / spec.name)
     out.prepare(spec, force=args.force, resume=args.resume)
     if spec.study is not None:
@@ -520,22 +524,19 @@ def _run_units(todo: list[Any], total: int, already: int, out: Any, run_unit: An
 
 
 def _record_bench(spec: Any, out: Any, summary: Any, record_dir: Any, nthread: Any) -> None:
-    from pendulum_lqg.plant import load_plant
     from pendulum_lqg.plugins import build_policy
     from pendulum_lqg.record import record_episodes, telling_episodes
     from pendulum_lqg.sim import run_episodes
 
     record_dir.mkdir(parents=True, exist_ok=True)
     rows = out.collect(spec)
-    nominal = load_plant()
     for cfg in spec.configurations:
         mine = [r for r in rows if r["config"] == cfg.index]
         picks = telling_episodes(mine)
         if not picks:
             continue
         scenario, dspec = cfg.build()
-        sim_plant = nominal if scenario.overrides.is_empty() else load_plant(
-            overrides=scenario.overrides)
+        nominal, sim_plant = cfg.plants(scenario)
         policy = build_policy(cfg.plugin, plant=nominal, scenario=scenario, spec=dspec)
         episodes = sorted(set(picks.values()))
         res = run_episodes(sim_plant, scenario, policy, seed=spec.seed, episodes=episodes,

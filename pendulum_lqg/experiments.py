@@ -17,6 +17,8 @@ An experiment file describes a grid::
     [design]                # fixed DesignSpec fields (see pendulum_lqg.policy.DesignSpec)
     R = 1.0
 
+    model_file = "my_cartpole.xml"   # optional: your own cart-pole MJCF (default the shipped one)
+
     [model]                 # fixed overrides of the simulated plant (ModelOverrides)
 
     [grid]                  # every key a list; the sweep is their Cartesian product
@@ -50,11 +52,11 @@ from pathlib import Path
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.noise import NoiseModel
-from pendulum_lqg.plant import ModelOverrides
+from pendulum_lqg.plant import ModelOverrides, Plant
 from pendulum_lqg.policy import CONTROLLERS, OBSERVERS, DesignSpec
 
-TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "scenario", "noise", "design",
-            "model", "grid", "study", "margins", "roa")
+TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "model_file", "scenario", "noise",
+            "design", "model", "grid", "study", "margins", "roa")
 #: Analysis studies that are not plain grids: ``study = "NAME"`` plus an optional ``[NAME]`` table of
 #: its parameters; the grid still defines the configurations the study runs on
 #: (see :mod:`pendulum_lqg.analysis.studies`).
@@ -102,6 +104,8 @@ class Configuration:
     #: a user's policy plugin (``MODULE:ATTR`` or an absolute ``file.py:ATTR``) instead of the
     #: built-in ``design`` controller/observer
     plugin: str | None = None
+    #: the cart-pole MJCF (absolute path) instead of the shipped ``cartpole.xml``
+    model_file: str | None = None
 
     @property
     def label(self) -> str:
@@ -119,13 +123,26 @@ class Configuration:
     def to_dict(self) -> dict[str, object]:
         return dataclasses.asdict(self)
 
+    def plants(self, scenario: object | None = None) -> tuple[Plant, Plant]:
+        """``(nominal, simulated)``: the model the designs believe in (the XML as it is) and the
+        one simulated (with the scenario's mismatch overrides; the same object when there are
+        none)."""
+        from pendulum_lqg.plant import load_plant
+
+        if scenario is None:
+            scenario, _ = self.build()
+        overrides = scenario.overrides  # type: ignore[attr-defined]
+        nominal = load_plant(self.model_file)
+        simulated = nominal if overrides.is_empty() else load_plant(self.model_file,
+                                                                    overrides=overrides)
+        return nominal, simulated
+
     def validate(self) -> None:
         """Build the configuration and check it against the (possibly overridden) model."""
         from pendulum_lqg.linearize import steps_per_period
-        from pendulum_lqg.plant import load_plant
 
         scenario, _ = self.build()
-        steps_per_period(load_plant(overrides=scenario.overrides), scenario.control_period)
+        steps_per_period(self.plants(scenario)[1], scenario.control_period)
 
 
 @dataclass(frozen=True)
@@ -145,12 +162,16 @@ class ExperimentSpec:
     base_dir: Path | None = None
 
     def with_overrides(self, *, episodes: int | None = None, seed: int | None = None,
-                       ) -> ExperimentSpec:
+                       model_file: str | None = None) -> ExperimentSpec:
+        """The same experiment with ``--episodes`` / ``--seed`` / ``--model`` of the command line
+        (a model path given here is taken from the current folder)."""
         src = dict(self.source)
         if episodes is not None:
             src["episodes"] = episodes
         if seed is not None:
             src["seed"] = seed
+        if model_file is not None:
+            src["model_file"] = str(Path(model_file).resolve())
         return parse_spec(src, name=self.name, base_dir=self.base_dir)
 
     def units(self) -> list[WorkUnit]:
@@ -162,8 +183,12 @@ class ExperimentSpec:
         return out
 
     def fingerprint(self) -> str:
-        """Hash of the resolved spec: a resumed sweep must have the same one."""
+        """Hash of the resolved spec (and of a custom model file's bytes): a resumed sweep must
+        have the same one."""
         blob = json.dumps(self.source, sort_keys=True, default=str).encode()
+        model = self.configurations[0].model_file if self.configurations else None
+        if model is not None:
+            blob += Path(model).read_bytes()
         return hashlib.sha256(blob).hexdigest()[:16]
 
 
@@ -232,6 +257,22 @@ def _grid_point(values: dict[str, object], base: dict[str, dict[str, object]],
     return tables, plugin
 
 
+def _model_file(value: object, base_dir: Path | None) -> str | None:
+    """``model_file`` as an absolute path (relative to the experiment file's folder, else the
+    current folder), checked to exist."""
+    if value is None:
+        return None
+    if not isinstance(value, str) or not value:
+        raise ConfigError(f"model_file: expected a path to an MJCF file, got {value!r}")
+    path = Path(value).expanduser()
+    if not path.is_absolute():
+        near = base_dir / path if base_dir is not None else None
+        path = near if near is not None and near.is_file() else Path.cwd() / path
+    if not path.is_file():
+        raise ConfigError(f"model_file: no file {value!r}")
+    return str(path.resolve())
+
+
 def parse_spec(data: dict[str, object], *, name: str = "experiment",
                base_dir: Path | None = None) -> ExperimentSpec:
     """Validate an experiment mapping (as read from TOML).
@@ -276,6 +317,7 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment",
     for other in STUDIES:
         if other in data and other != study:
             raise ConfigError(f"{other}: a [{other}] table needs study = {other!r}")
+    model_file = _model_file(data.get("model_file"), base_dir)
     episodes = _as_int("episodes", data.get("episodes", 100), 1)
     seed = _as_int("seed", data.get("seed", 0), 0)
     chunk = _as_int("chunk", data.get("chunk", 250), 1)
@@ -285,7 +327,8 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment",
     for i, combo in enumerate(combos):
         values = dict(zip(keys, combo, strict=True))
         tables, plugin = _grid_point(values, base, base_dir)
-        cfg = Configuration(index=i, values=values, plugin=plugin, **tables)
+        cfg = Configuration(index=i, values=values, plugin=plugin, model_file=model_file,
+                            **tables)
         cfg.validate()  # every configuration now, not in the middle of a sweep
         configs.append(cfg)
     return ExperimentSpec(name=str(data.get("name", name)), description=str(
@@ -321,14 +364,11 @@ def load_spec(name_or_path: str) -> ExperimentSpec:
 
 def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, object]]:
     """Run one work unit; rows carry the configuration's grid values and index."""
-    from pendulum_lqg.plant import load_plant
     from pendulum_lqg.plugins import build_policy
     from pendulum_lqg.sim import run_episodes
 
     scenario, spec = unit.config.build()
-    nominal = load_plant()
-    simulated = load_plant(overrides=scenario.overrides) if not scenario.overrides.is_empty() \
-        else nominal
+    nominal, simulated = unit.config.plants(scenario)
     policy = build_policy(unit.config.plugin, plant=nominal, scenario=scenario, spec=spec)
     res = run_episodes(simulated, scenario, policy, seed=unit.seed,
                        episodes=range(unit.start, unit.stop), nthread=nthread)

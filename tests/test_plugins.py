@@ -180,3 +180,40 @@ def test_import_registers_the_env_without_an_import_hook():
             "env = gym.make('pendulum_lqg:pendulum_lqg/CartPoleLQG-v0'); print(env.spec.id)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == pendulum_lqg.ENV_ID
+
+
+# ---- your own cart-pole model ---------------------------------------------------------------------
+def _heavier_pole_model(tmp_path: Path) -> Path:
+    xml = (data_dir("models") / "cartpole.xml").read_text()
+    pole = 'size="0.015" mass="0.1"/>'
+    assert xml.count(pole) == 1                # the pole geom of the shipped model
+    path = tmp_path / "heavy_pole.xml"
+    path.write_text(xml.replace(pole, 'size="0.015" mass="0.2"/>'))
+    return path
+
+
+def test_bench_with_your_own_model(tmp_path, capsys):
+    model = _heavier_pole_model(tmp_path)
+    assert load_plant(model).pole_mass == pytest.approx(0.2)
+    toml = tmp_path / "small.toml"
+    toml.write_text('name = "small"\nepisodes = 4\nseed = 1\n[scenario]\nduration = 2.0\n'
+                    '[grid]\npolicy = ["dlqr+kalman"]\n')
+    assert main(["bench", str(toml), "--out", str(tmp_path / "own"), "--quiet",
+                 "--model", str(model)]) == 0
+    assert main(["bench", str(toml), "--out", str(tmp_path / "shipped"), "--quiet"]) == 0
+    capsys.readouterr()
+    own = json.loads((tmp_path / "own" / "spec.json").read_text())
+    shipped = json.loads((tmp_path / "shipped" / "spec.json").read_text())
+    assert own["spec"]["model_file"] == str(model.resolve())
+    assert own["fingerprint"] != shipped["fingerprint"]
+    assert (tmp_path / "own" / "episodes.csv").read_text() != \
+        (tmp_path / "shipped" / "episodes.csv").read_text()
+    # the same model under another name gives the shipped model's episodes byte for byte
+    copy = tmp_path / "copy.xml"
+    copy.write_text((data_dir("models") / "cartpole.xml").read_text())
+    toml.write_text(toml.read_text().replace("seed = 1\n", 'seed = 1\nmodel_file = "copy.xml"\n'))
+    assert main(["bench", str(toml), "--out", str(tmp_path / "copy"), "--quiet"]) == 0
+    assert (tmp_path / "copy" / "episodes.csv").read_bytes() == \
+        (tmp_path / "shipped" / "episodes.csv").read_bytes()
+    with pytest.raises(Exception, match="model_file: no file"):
+        parse_spec({"model_file": "nowhere.xml"}, base_dir=tmp_path)

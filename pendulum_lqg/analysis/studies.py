@@ -190,7 +190,6 @@ def run_margins(spec: Any, out: Any, *, log: Log = None) -> dict[str, object]:
     from pendulum_lqg import design
     from pendulum_lqg.analysis import margins as M
     from pendulum_lqg.linearize import discretize_zoh, linearize
-    from pendulum_lqg.plant import load_plant
     from pendulum_lqg.policy import design_policy
 
     prm = spec.study_params
@@ -198,7 +197,7 @@ def run_margins(spec: Any, out: Any, *, log: Log = None) -> dict[str, object]:
     if plugins:
         raise ConfigError(f"grid.policy: the margins study needs each policy's linear loop; a "
                           f"plugin ({plugins[0]}) has none — run it with bench grids or roa")
-    plant = load_plant()
+    plant = spec.configurations[0].plants()[0]
     lin = linearize(plant)
     A, B, C = lin.A, lin.B, lin.C
     scenario0, dspec0 = spec.configurations[0].build()
@@ -306,11 +305,9 @@ def run_roa(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
     and the noise-free (θ₀, θ̇₀) map. Finished configurations are kept in ``units/`` and skipped
     by a resumed run."""
     from pendulum_lqg.analysis.roa import bisect_theta, success_map
-    from pendulum_lqg.plant import load_plant
     from pendulum_lqg.plugins import build_policy
 
     prm = spec.study_params
-    nominal = load_plant()
     t_lo, t_hi, t_n = prm["map_theta"]
     d_lo, d_hi, d_n = prm["map_theta_dot"]
     thetas = np.linspace(t_lo, t_hi, int(t_n))
@@ -322,8 +319,7 @@ def run_roa(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
             results.append(json.loads(unit.read_text()))
             continue
         scenario, dspec = cfg.build()
-        simulated = nominal if scenario.overrides.is_empty() else load_plant(
-            overrides=scenario.overrides)
+        nominal, simulated = cfg.plants(scenario)
         policy = build_policy(cfg.plugin, plant=nominal, scenario=scenario, spec=dspec)
         bis = bisect_theta(simulated, scenario, policy, seed=spec.seed, episodes=spec.episodes,
                            level=prm["level"], theta_lo=prm["theta_lo"],
