@@ -16,9 +16,11 @@ _GL_CHOSEN_HERE = "MUJOCO_GL" in os.environ or "mujoco" not in sys.modules
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 import pickle  # noqa: E402
+import shutil  # noqa: E402
 import subprocess  # noqa: E402
 import textwrap  # noqa: E402
 import warnings  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import gymnasium as gym  # noqa: E402
 import mujoco  # noqa: E402
@@ -110,26 +112,36 @@ def test_registered_with_episode_length_derived_from_duration_and_period():
         assert truncs == [False] * (steps - 1) + [True]
 
 
-def test_registration_is_lazy_and_module_form_needs_no_import():
+def test_import_registers_as_gymnasium_packages_do_without_an_import_hook():
     code = textwrap.dedent("""
         import sys
         import pendulum_lqg
-        assert "gymnasium" not in sys.modules and "mujoco" not in sys.modules
         import gymnasium as gym
-        assert pendulum_lqg.ENV_ID in gym.registry
-        import importlib.resources
-        assert (importlib.resources.files("gymnasium") / "envs").is_dir()
-        print("lazy ok")
+        assert pendulum_lqg.ENV_ID in gym.registry and "mujoco" not in sys.modules
+        assert not any("pendulum" in type(f).__name__.lower() for f in sys.meta_path)
+        gym.register_envs(pendulum_lqg)
+        print("registered")
     """)
     module_form = textwrap.dedent("""
         import gymnasium as gym
         env = gym.make("pendulum_lqg:pendulum_lqg/CartPoleLQG-v0")
         print(type(env.unwrapped).__name__, env.spec.max_episode_steps)
     """)
-    for src, expected in ((code, "lazy ok"), (module_form, "CartPoleLQGEnv 1000")):
+    for src, expected in ((code, "registered"), (module_form, "CartPoleLQGEnv 1000")):
         out = subprocess.run([sys.executable, "-c", src], capture_output=True, text=True,
                              timeout=120, check=True)
         assert out.stdout.strip() == expected, out.stderr
+
+
+def test_cli_help_imports_neither_gymnasium_nor_numpy():
+    script = shutil.which("pendulum-lqg", path=str(Path(sys.executable).parent))
+    assert script is not None
+    out = subprocess.run([sys.executable, "-X", "importtime", script, "--help"],
+                         capture_output=True, text=True, timeout=60, check=True)
+    imported = {line.split("|")[-1].strip() for line in out.stderr.splitlines() if "|" in line}
+    assert "pendulum_lqg" in imported and "pendulum_lqg.cli" in imported
+    assert "numpy" not in imported and "gymnasium" not in imported
+    assert "usage: pendulum-lqg" in out.stdout
 
 
 # ---- gymnasium conformance -----------------------------------------------------------------------
