@@ -152,6 +152,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--record", metavar="DIR", default=None,
                    help="record the worst/median/best/first-failing episode of each configuration")
     p.add_argument("--nthread", type=_nonneg_int, default=None, help="rollout threads")
+    p.add_argument("--executor", choices=("local", "ray"), default="local",
+                   help="where work units run: this process (default) or Ray tasks (needs the "
+                        "extra: pip install 'pendulum-lqg[ray]'); results are byte-identical")
+    p.add_argument("--address", default=None, metavar="ADDR",
+                   help="with --executor ray: join the cluster at 'auto' or HOST:PORT (default: "
+                        "start a local Ray instance for the run)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
     p = sub.add_parser("report", help="turn results folders into a Markdown report with PNG figures",
@@ -423,132 +429,76 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None
 
 # ---- bench ---------------------------------------------------------------------------------------
 def cmd_bench(args: argparse.Namespace) -> int:
-    import os
-    import platform
-    import signal
-    import time
     from pathlib import Path
 
-    from pendulum_lqg.experiments import load_spec, run_unit
+    from pendulum_lqg.executors import make_executor
+    from pendulum_lqg.experiments import load_spec
     from pendulum_lqg.results import ResultsDir
+    from pendulum_lqg.sweep import SweepInterrupted, run_sweep
 
     spec = load_spec(args.experiment).with_overrides(episodes=args.episodes, seed=args.seed,
                                                      model_file=args.model)
     out = ResultsDir(args.out or Path("results") / spec.name)
-    out.prepare(spec, force=args.force, resume=args.resume)
+    log = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
     if spec.study is not None:
+        if args.executor != "local":
+            raise _cfg_error(f"--executor: the {spec.study} study runs on the local executor")
+        out.prepare(spec, force=args.force, resume=args.resume)
         return _bench_study(spec, out, args)
-    units = spec.units()
-    done = out.done()
-    todo = [u for u in units if u.key not in done]
-
-    def _terminate(signum: int, frame: object) -> None:
-        raise KeyboardInterrupt
-
-    old = signal.signal(signal.SIGTERM, _terminate)
-    started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
-    t0 = time.perf_counter()
+    executor = make_executor(args.executor, address=args.address, nthread=args.nthread)
     try:
-        _run_units(todo, len(units), len(units) - len(todo), out, run_unit, args)
-    except KeyboardInterrupt:
-        out.release()
-        finished = len(out.done())
-        print(f"interrupted: {finished}/{len(units)} work units are saved in {out.path}; "
-              f"complete them with: pendulum-lqg bench {args.experiment} --resume --out {out.path}"
-              + (f" --episodes {spec.episodes}" if args.episodes else "")
-              + (f" --seed {spec.seed}" if args.seed is not None else ""), file=sys.stderr)
+        result = run_sweep(spec, out, executor=executor, resume=args.resume, force=args.force,
+                           progress=None if not args.quiet else False, log=log,
+                           record=args.record, nthread=args.nthread)
+    except SweepInterrupted as exc:
+        print(f"interrupted: {exc}; complete them with: {_resume_command(args, spec, out)}",
+              file=sys.stderr)
         return 130
-    finally:
-        signal.signal(signal.SIGTERM, old)
-    try:
-        meta = {"started": started, "elapsed_s": round(time.perf_counter() - t0, 3),
-                "units_run_now": len(todo), "python": platform.python_version(),
-                "machine": platform.machine(), "cpus": os.cpu_count()}
-        summary = out.finalize(spec, meta)
-        if args.record:
-            _record_bench(spec, out, summary, Path(args.record), args.nthread)
-    finally:
-        out.release()
+    if not result.complete:
+        for failure in result.failures:
+            print(f"error: work unit {failure.key} failed: {failure.error}", file=sys.stderr)
+        print(f"incomplete: {len(result.failures)}/{result.units_total} work units failed; the "
+              f"others are saved in {out.path}; rerun the failed ones with: "
+              f"{_resume_command(args, spec, out)}", file=sys.stderr)
+        return 1
     sys.stdout.write((out.path / "summary.md").read_text())
     print(f"\nresults: {out.path}/episodes.csv, summary.md, summary.json", file=sys.stderr)
-    del summary
     return 0
+
+
+def _resume_command(args: argparse.Namespace, spec: Any, out: Any) -> str:
+    """The command that completes this sweep (same file, episodes, seed, model, executor)."""
+    parts = ["pendulum-lqg bench", args.experiment, "--resume", "--out", str(out.path)]
+    if args.episodes:
+        parts += ["--episodes", str(spec.episodes)]
+    if args.seed is not None:
+        parts += ["--seed", str(spec.seed)]
+    if args.model:
+        parts += ["--model", args.model]
+    if args.executor != "local":
+        parts += ["--executor", args.executor] + (["--address", args.address]
+                                                  if args.address else [])
+    return " ".join(parts)
 
 
 def _bench_study(spec: Any, out: Any, args: argparse.Namespace) -> int:
     """``bench`` of an analysis study (``study = "margins" | "roa"`` in the TOML)."""
     from pendulum_lqg.analysis.studies import run_study
+    from pendulum_lqg.sweep import terminate_as_interrupt
 
     log = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
     try:
-        run_study(spec, out, nthread=args.nthread, log=log)
+        with terminate_as_interrupt():
+            run_study(spec, out, nthread=args.nthread, log=log)
     except KeyboardInterrupt:
         print(f"interrupted: finished configurations are saved in {out.path}; complete them with: "
-              f"pendulum-lqg bench {args.experiment} --resume --out {out.path}", file=sys.stderr)
+              f"{_resume_command(args, spec, out)}", file=sys.stderr)
         return 130
     finally:
         out.release()
     sys.stdout.write((out.path / "summary.md").read_text())
     print(f"\nresults: {out.path}/summary.md, summary.json", file=sys.stderr)
     return 0
-
-
-def _run_units(todo: list[Any], total: int, already: int, out: Any, run_unit: Any,
-               args: argparse.Namespace) -> None:
-    if args.quiet or not sys.stderr.isatty():
-        for i, unit in enumerate(todo, start=already + 1):
-            rows = run_unit(unit, nthread=args.nthread)
-            out.write_unit(unit, rows)
-            if not args.quiet:
-                print(f"[{i}/{total}] {unit.config.label} episodes {unit.start}-{unit.stop - 1}",
-                      file=sys.stderr)
-        return
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                  TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
-                  transient=False) as prog:
-        task = prog.add_task("work units", total=total, completed=already)
-        for unit in todo:
-            prog.update(task, description=unit.config.label[:60])
-            rows = run_unit(unit, nthread=args.nthread)
-            out.write_unit(unit, rows)
-            prog.advance(task)
-
-
-def _record_bench(spec: Any, out: Any, summary: Any, record_dir: Any, nthread: Any) -> None:
-    from pendulum_lqg.plugins import build_policy
-    from pendulum_lqg.record import record_episodes, telling_episodes
-    from pendulum_lqg.sim import run_episodes
-
-    record_dir.mkdir(parents=True, exist_ok=True)
-    rows = out.collect(spec)
-    for cfg in spec.configurations:
-        mine = [r for r in rows if r["config"] == cfg.index]
-        picks = telling_episodes(mine)
-        if not picks:
-            continue
-        scenario, dspec = cfg.build()
-        nominal, sim_plant = cfg.plants(scenario)
-        policy = build_policy(cfg.plugin, plant=nominal, scenario=scenario, spec=dspec)
-        episodes = sorted(set(picks.values()))
-        res = run_episodes(sim_plant, scenario, policy, seed=spec.seed, episodes=episodes,
-                           nthread=nthread, trajectory=True)
-        path = record_dir / f"{spec.name}_config{cfg.index:03d}.rrd"
-        config = {"experiment": spec.name, "configuration": cfg.values, "seed": spec.seed,
-                  "telling_episodes": picks, "scenario": scenario.to_dict(),
-                  "design": None if cfg.plugin else _dataclass_dict(dspec)}
-        record_episodes(res.trajectories, plant=sim_plant, scenario=scenario, policy=policy,
-                        config=config, path=path, labels=picks)
-        print(f"recorded {path} ({', '.join(f'{k}: {v}' for k, v in picks.items())})",
-              file=sys.stderr)
 
 
 # ---- report --------------------------------------------------------------------------------------

@@ -206,7 +206,8 @@ class WorkUnit:
         return f"c{self.config.index:03d}_e{self.start:06d}-{self.stop:06d}"
 
     def to_json(self) -> str:
-        return json.dumps(dataclasses.asdict(self), sort_keys=True)
+        """Plain JSON; the grid values keep their order (it is the column order of the rows)."""
+        return json.dumps(dataclasses.asdict(self))
 
     @classmethod
     def from_json(cls, text: str) -> WorkUnit:
