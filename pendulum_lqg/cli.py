@@ -15,6 +15,8 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 EXIT_USAGE = 2
+#: The file ``run --spawn`` writes when no ``--record FILE`` is given.
+DEFAULT_RECORDING = "recording.rrd"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -134,7 +136,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--nthread", type=_nonneg_int, default=None, help="rollout threads")
     p.add_argument("--record", metavar="FILE.rrd", default=None,
                    help="write a Rerun recording of every episode")
-    p.add_argument("--spawn", action="store_true", help="open a Rerun viewer with the recording")
+    p.add_argument("--spawn", action="store_true",
+                   help="also stream the recording to a native Rerun viewer; the file is written "
+                        f"all the same (--record, default {DEFAULT_RECORDING}); without a display, "
+                        "or with no viewer listening within 5 s, only the file is written")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     _add_design_options(p)
 
@@ -379,9 +384,15 @@ def cmd_run(args: argparse.Namespace) -> int:
     if recording:
         from pendulum_lqg.record import record_episodes
 
+        path = args.record if args.record is not None else DEFAULT_RECORDING
         stats = record_episodes(res.trajectories, plant=plant, scenario=scenario, policy=policy,
-                                config=config, path=args.record, spawn=args.spawn)
-        print(f"recording: {stats}", file=sys.stderr)
+                                config=config, path=path, spawn=args.spawn)
+        if stats.viewer_note:
+            print(f"viewer: {stats.viewer_note}; open the file with: rerun {path}",
+                  file=sys.stderr)
+        print(f"recording: {stats.path} ({stats.episodes} episode(s), {stats.bytes:,} bytes"
+              + (", streamed to the viewer" if stats.viewer_reached else "") + ")",
+              file=sys.stderr)
     if args.json:
         print(json.dumps(_jsonable(out), indent=2))
     else:

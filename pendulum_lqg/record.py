@@ -50,7 +50,6 @@ import json
 import subprocess
 import sys
 import time
-import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -73,6 +72,39 @@ TIMELINE = "sim_time"
 MAX_EPISODE_TABS = 12
 #: Seconds to wait for a spawned viewer to take the data before giving up on it.
 SPAWN_FLUSH_TIMEOUT = 10.0
+#: Seconds to wait for a spawned viewer to listen on its port before writing only the file.
+VIEWER_WAIT = 5.0
+#: The port the spawned viewer listens on (Rerun's default).
+VIEWER_PORT = 9876
+
+
+def _start_viewer(rec: Any) -> tuple[bool, str | None]:
+    """Spawn a native Rerun viewer and wait (at most :data:`VIEWER_WAIT` s) until it listens.
+
+    Returns ``(reachable, note)``; ``note`` says in one line why no viewer will get the data: no
+    display on Linux (a viewer would never come up, so none is started), no ``rerun`` executable,
+    or no viewer listening in time. Nothing here can block for longer than the wait.
+    """
+    import os
+    import socket
+    import sys
+
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
+                                                 or os.environ.get("WAYLAND_DISPLAY")):
+        return False, "no display (DISPLAY and WAYLAND_DISPLAY are unset), so no viewer was started"
+    try:
+        rec.spawn(port=VIEWER_PORT, connect=False)
+    except (RuntimeError, OSError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        return False, f"cannot start the Rerun viewer ({first})"
+    deadline = time.monotonic() + VIEWER_WAIT
+    while time.monotonic() < deadline:
+        try:
+            with socket.create_connection(("127.0.0.1", VIEWER_PORT), timeout=0.5):
+                return True, None
+        except OSError:
+            time.sleep(0.1)
+    return False, f"no Rerun viewer listened on port {VIEWER_PORT} within {VIEWER_WAIT:g} s"
 
 _SYMBOLS = {"p": "p", "theta": "θ", "p_dot": "ṗ", "theta_dot": "θ̇"}
 _UNITS = {"p": "m", "theta": "rad", "p_dot": "m/s", "theta_dot": "rad/s"}
@@ -99,6 +131,7 @@ class RecordingStats:
     path : the ``.rrd`` file written (``None`` if only a viewer was spawned)
     bytes : size of that file (0 without a file)
     viewer_reached : with ``spawn``, whether the spawned viewer took all data (``None`` without)
+    viewer_note : with ``spawn``, why no viewer got the data (one line), else ``None``
     """
 
     episodes: int
@@ -109,6 +142,7 @@ class RecordingStats:
     path: Path | None
     bytes: int
     viewer_reached: bool | None = None
+    viewer_note: str | None = None
 
 
 @dataclass(frozen=True)
@@ -667,9 +701,14 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
     out_path = Path(path) if path is not None else None
     if out_path is not None:
         out_path.parent.mkdir(parents=True, exist_ok=True)
+    viewer_note: str | None = None
+    viewer = False
     if spawn:
-        rec.spawn(connect=False)
-        sinks: list[Any] = [rr.GrpcSink()]
+        viewer, viewer_note = _start_viewer(rec)
+        if not viewer and out_path is None:
+            raise ConfigError(f"spawn: {viewer_note}; give a path to write the recording to")
+    if viewer:
+        sinks: list[Any] = [rr.GrpcSink(f"rerun+http://127.0.0.1:{VIEWER_PORT}/proxy")]
         if out_path is not None:
             sinks.append(rr.FileSink(str(out_path)))
         rec.set_sinks(*sinks, default_blueprint=blueprint)
@@ -685,17 +724,15 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
                                          media_type=rr.MediaType.MARKDOWN))
     for pre, tr, label in prefixes:
         _record_episode(w, plant, tr, pre, estimated=estimated, label=label, u_max=plant.u_max)
-    viewer_reached: bool | None = None
-    if spawn:
-        # A spawned viewer that never came up (e.g. no display) would block an unbounded flush.
+    viewer_reached: bool | None = None if not spawn else viewer
+    if viewer:
+        # a viewer that accepted the connection but stalls must not block an unbounded flush
         try:
             rec.flush(timeout_sec=SPAWN_FLUSH_TIMEOUT)
-            viewer_reached = True
         except RuntimeError as exc:
             viewer_reached = False
-            warnings.warn(f"record: the spawned Rerun viewer did not take the recording ({exc})"
-                          + (f"; the file {out_path} is still written" if out_path else ""),
-                          RuntimeWarning, stacklevel=2)
+            viewer_note = (f"the Rerun viewer did not take the recording within "
+                           f"{SPAWN_FLUSH_TIMEOUT:g} s ({' '.join(str(exc).split())[:120]})")
     else:
         rec.flush()
     rec.disconnect()
@@ -703,7 +740,7 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
     size = out_path.stat().st_size if out_path is not None and out_path.exists() else 0
     return RecordingStats(episodes=len(trajectories), entities=len(w.entities), rows=w.rows,
                           seconds=seconds, seconds_logging=w.seconds, path=out_path, bytes=size,
-                          viewer_reached=viewer_reached)
+                          viewer_reached=viewer_reached, viewer_note=viewer_note)
 
 
 # ---- reading back and verifying -------------------------------------------------------------

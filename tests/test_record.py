@@ -108,6 +108,32 @@ def test_rrd_verify_rejects_a_truncated_file(kalman, tmp_path):
     assert not check.ok and check.returncode != 0
 
 
+@pytest.mark.parametrize(("display", "note"), [
+    (None, "viewer: no display (DISPLAY and WAYLAND_DISPLAY are unset), so no viewer was started"),
+    (":99", "viewer: no Rerun viewer listened on port 9876 within 5 s"),   # a display that is not
+])
+def test_spawn_without_a_reachable_viewer_never_hangs_and_writes_the_file(tmp_path, display,
+                                                                          note):
+    """`run --record F --spawn` on a headless machine: one line, a complete file, the summary."""
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"  # `rerun`
+    if display is not None:
+        env["DISPLAY"] = display
+    path = tmp_path / "spawned.rrd"
+    out = subprocess.run([sys.executable, "-m", "pendulum_lqg.cli", "run", "--record", str(path),
+                          "--spawn", "--episodes", "1", "--duration", "1"], env=env,
+                         capture_output=True, text=True, timeout=90)
+    assert out.returncode == 0, out.stderr
+    ours = [line for line in out.stderr.splitlines() if line.startswith(("viewer:", "recording:"))]
+    assert ours[0].startswith(note) and ours[0].endswith(f"open the file with: rerun {path}")
+    assert ours[1].startswith(f"recording: {path} (1 episode(s), ")
+    assert "success: 1/1" in out.stdout
+    check = verify_recording(path)
+    assert check.ok, check.output
+
+
 @pytest.mark.parametrize("case", ["luenberger", "kalman"])
 def test_entity_tree_blueprint_and_timeline(case, request):
     tr, _, path, stats = request.getfixturevalue(case)
