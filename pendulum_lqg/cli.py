@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -20,6 +21,18 @@ DEFAULT_RECORDING = "recording.rrd"
 
 
 class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors, and values that start with a minus sign taken as values.
+
+    ``--observer-poles -2,-3,-4,-5`` or ``--theta0 -0.1``: argparse's own rule treats only plain
+    negative numbers (``-2``) as values; here anything that starts with ``-`` followed by a digit
+    or a dot (comma lists, complex poles like ``-1+2j``) is a value too, since no option of the
+    command looks like that.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
+
     def error(self, message: str) -> None:  # one line, status 2, no traceback
         self.print_usage(sys.stderr)
         print(f"error: {message}", file=sys.stderr)
@@ -86,16 +99,20 @@ def _add_design_options(p: argparse.ArgumentParser) -> None:
                    help="control period T in seconds, a multiple of the model's physics step "
                         "(default 0.01)")
     g.add_argument("--q", type=_floats, default=None, metavar="Q1,..,Q4",
-                   help="diagonal of the LQR state weight Q (default 1,1,1,1)")
+                   help="diagonal of the LQR state weight Q, units of [m⁻², rad⁻², (m/s)⁻², "
+                        "(rad/s)⁻²] (default 1,1,1,1)")
     g.add_argument("--r", type=_number, default=None, help="LQR input weight R in N⁻² (default 1)")
     g.add_argument("--observer-poles", type=_complexes, default=None, metavar="P1,..,P4",
-                   help="continuous-time Luenberger poles (s-plane; default -0.4,-0.5,-0.6,-0.7); "
+                   help="continuous-time Luenberger poles in rad/s, e.g. --observer-poles "
+                        "-2,-3,-4,-5 or -1+2j,-1-2j,-3,-4 (default -0.4,-0.5,-0.6,-0.7); "
                         "discrete designs use z = exp(s·T)")
     g.add_argument("--w", type=_floats, default=None, metavar="W",
-                   help="process-noise spectral density, diagonal (units²·s; default the lecture's "
-                        "4e-4 on every state)")
+                   help="process-noise spectral density, diagonal: 4 values (m²·s, rad²·s, …) "
+                        "for state noise, 2 (N²·s, N²m²·s) for force noise (default the "
+                        "lecture's 4e-4 on every state)")
     g.add_argument("--v", type=_floats, default=None, metavar="V",
-                   help="measurement-noise covariance per sample, diagonal (m², rad²; default 0.01)")
+                   help="measurement-noise covariance per sample, diagonal (m², rad²; default "
+                        "0.01,0.01)")
     g.add_argument("--process-noise", choices=("state", "force"), default="state",
                    help="where process noise enters: the state (F = I₄, lecture) or generalised "
                         "forces on slider and hinge (default state)")
@@ -104,16 +121,20 @@ def _add_design_options(p: argparse.ArgumentParser) -> None:
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="pendulum-lqg",
                      description="LQG control of a MuJoCo cart-pole under noise: designs, noisy "
-                                 "closed-loop runs and benchmarks.")
+                                 "closed-loop runs and benchmarks. Negative numbers and lists are "
+                                 "given as they are: --observer-poles -2,-3,-4,-5.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("design", help="print the linearisation and every controller/observer design",
                        description="Linearise the MuJoCo cart-pole about the upright and print "
                                    "continuous/discrete LQR, Kalman and Luenberger designs.")
     _add_design_options(p)
-    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--json", action="store_true",
+                   help="machine-readable output (matrices as nested lists, poles as [re, im])")
 
-    p = sub.add_parser("run", help="run seeded noisy episodes of one policy and summarise them")
+    p = sub.add_parser("run", help="run seeded noisy episodes of one policy and summarise them",
+                       description="Run seeded episodes of one policy (built-in or your own "
+                                   "plugin) in the noisy MuJoCo loop and print their summary.")
     p.add_argument("--policy", default=None, metavar="NAME",
                    help="the policy: a built-in 'controller+observer' (e.g. dlqr+kalman) or your "
                         "own plugin MODULE:ATTR or path/to/file.py:ATTR, a factory taking a "
@@ -123,47 +144,66 @@ def build_parser() -> argparse.ArgumentParser:
                    help="built-in controller (default dlqr); not with --policy")
     p.add_argument("--observer", choices=OBSERVERS, default=None,
                    help="built-in observer (default kalman); not with --policy")
-    p.add_argument("--episodes", type=_positive_int, default=100)
-    p.add_argument("--seed", type=_nonneg_int, default=0)
-    p.add_argument("--duration", type=_number, default=10.0, help="episode length in s (default 10)")
+    p.add_argument("--episodes", type=_positive_int, default=100,
+                   help="number of episodes (default 100)")
+    p.add_argument("--seed", type=_nonneg_int, default=0,
+                   help="the run's seed; episode k draws from episode_seed(seed, k) (default 0)")
+    p.add_argument("--duration", type=_number, default=10.0,
+                   help="episode length in s (default 10)")
     p.add_argument("--noise-scale", type=_number, default=1.0,
-                   help="multiplies both noises' standard deviations (0 = noise-free); the "
-                        "estimators stay designed for the nominal noise")
-    p.add_argument("--theta0", type=_number, default=0.1, help="initial pole angle in rad")
+                   help="multiplies both noises' standard deviations (0 = noise-free; default 1); "
+                        "the estimators stay designed for the nominal noise")
+    p.add_argument("--theta0", type=_number, default=0.1,
+                   help="initial pole angle in rad, e.g. --theta0 -0.1 (default 0.1)")
     p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
-                   help="initial estimate: x̂₀ = 0 (default) or the true x₀")
-    p.add_argument("--backend", choices=("rollout", "step"), default="rollout")
-    p.add_argument("--nthread", type=_nonneg_int, default=None, help="rollout threads")
+                   help="initial estimate: x̂₀ = 0 or the true x₀ (default zero)")
+    p.add_argument("--backend", choices=("rollout", "step"), default="rollout",
+                   help="batched mujoco.rollout or a plain mj_step loop; bit-identical results "
+                        "(default rollout)")
+    p.add_argument("--nthread", type=_nonneg_int, default=None,
+                   help="rollout threads (default: the CPU cores available, at most 8)")
     p.add_argument("--record", metavar="FILE.rrd", default=None,
-                   help="write a Rerun recording of every episode")
+                   help="write a Rerun recording of every episode to FILE.rrd (default: none)")
     p.add_argument("--spawn", action="store_true",
                    help="also stream the recording to a native Rerun viewer; the file is written "
                         f"all the same (--record, default {DEFAULT_RECORDING}); without a display, "
                         "or with no viewer listening within 5 s, only the file is written")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--json", action="store_true",
+                   help="machine-readable output: configuration, summary and every episode row")
     _add_design_options(p)
 
-    p = sub.add_parser("bench", help="run an experiment grid from experiments/*.toml")
-    p.add_argument("experiment", help="name of a file in experiments/ (e.g. lecture) or a TOML path")
+    p = sub.add_parser("bench", help="run an experiment grid (experiments/*.toml)",
+                       description="Run an experiment: a grid of configurations × seeded episodes "
+                                   "(or an analysis study), written unit by unit into a results "
+                                   "folder and summarised. README: the experiment file format.")
+    p.add_argument("experiment",
+                   help="a shipped experiment (lecture, noise, plugins, …), NAME.toml in the "
+                        "current folder, or a path to a TOML file")
     p.add_argument("--episodes", type=_positive_int, default=None,
                    help="episodes per configuration (default: the file's)")
     p.add_argument("--seed", type=_nonneg_int, default=None, help="seed (default: the file's)")
-    p.add_argument("--out", default=None, help="results folder (default results/<name>)")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="results folder (default results/<name> under the current folder)")
     p.add_argument("--model", default=None, metavar="XML",
                    help="your own cart-pole MJCF (README: the model contract) instead of the "
                         "experiment's model_file or the shipped models/cartpole.xml")
-    p.add_argument("--force", action="store_true", help="overwrite an existing results folder")
-    p.add_argument("--resume", action="store_true", help="complete an interrupted sweep")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite the results already in --out (default: refuse)")
+    p.add_argument("--resume", action="store_true",
+                   help="complete an interrupted sweep in --out (same file, episodes and seed)")
     p.add_argument("--record", metavar="DIR", default=None,
-                   help="record the worst/median/best/first-failing episode of each configuration")
-    p.add_argument("--nthread", type=_nonneg_int, default=None, help="rollout threads")
+                   help="also record the worst/median/best/first-failing episode of each "
+                        "configuration into DIR (default: none)")
+    p.add_argument("--nthread", type=_nonneg_int, default=None,
+                   help="rollout threads (default: the CPU cores available, at most 8)")
     p.add_argument("--executor", choices=("local", "ray"), default="local",
                    help="where work units run: this process (default) or Ray tasks (needs the "
                         "extra: pip install 'pendulum-lqg[ray]'); results are byte-identical")
     p.add_argument("--address", default=None, metavar="ADDR",
                    help="with --executor ray: join the cluster at 'auto' or HOST:PORT (default: "
                         "start a local Ray instance for the run)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress bar or per-unit lines (the table is still printed)")
 
     p = sub.add_parser("report", help="turn results folders into a Markdown report with PNG figures",
                        description="Read results folders written by `pendulum-lqg bench` (grids and "
@@ -171,19 +211,25 @@ def build_parser() -> argparse.ArgumentParser:
                                    "PNG figures.")
     p.add_argument("results", nargs="+", metavar="RESULTS",
                    help="results folders, or a folder holding several (e.g. results_small)")
-    p.add_argument("--out", default=None,
+    p.add_argument("--out", default=None, metavar="DIR",
                    help="report folder (default: <RESULTS>/report for one folder argument, else "
                         "report/)")
 
-    p = sub.add_parser("perf", help="throughput: closed loop vs raw mujoco.rollout, single path, memory")
-    p.add_argument("--episodes", type=_positive_int, default=1024)
-    p.add_argument("--duration", type=_number, default=2.0, help="seconds simulated per episode")
-    p.add_argument("--nthread", type=_nonneg_int, default=None)
+    p = sub.add_parser("perf", help="throughput: closed loop vs bare mujoco.rollout, memory",
+                       description="Time the batched noisy DLQR + Kalman loop against MuJoCo's "
+                                   "own open-loop rollout of the same batch, alternating, and "
+                                   "optionally the peak memory of long benches.")
+    p.add_argument("--episodes", type=_positive_int, default=1024,
+                   help="episodes in the batch (default 1024)")
+    p.add_argument("--duration", type=_number, default=2.0,
+                   help="seconds simulated per episode (default 2)")
+    p.add_argument("--nthread", type=_nonneg_int, default=None,
+                   help="rollout threads (default: the CPU cores available, at most 8)")
     p.add_argument("--repeats", type=_positive_int, default=5,
-                   help="raw / closed-loop pairs, alternating (medians are compared)")
+                   help="raw / closed-loop pairs, alternating; medians are compared (default 5)")
     p.add_argument("--memory", action="store_true",
                    help="also measure peak memory of 1000-episode benches of 2 s and 10 s")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
     return parser
 
 
@@ -423,19 +469,28 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None
     t = Table()
     t.add_column("metric")
     t.add_column("mean ± s.e.")
-    for key, label in (("cost", "J = ∫xᵀQx + uᵀRu dt (successes)"), ("rms_theta", "RMS θ [rad]"),
-                       ("max_abs_theta", "max |θ| [rad]"), ("rms_p", "RMS p [m]"),
-                       ("max_abs_p", "max |p| [m]"), ("rms_u", "RMS u [N]"),
-                       ("max_abs_u", "max |u| [N]"), ("saturated_fraction", "time saturated"),
-                       ("rms_est_err_p", "RMS p̂−p [m]"), ("rms_est_err_theta", "RMS θ̂−θ [rad]"),
-                       ("rms_est_err_p_dot", "RMS ṗ̂−ṗ [m/s]"),
-                       ("rms_est_err_theta_dot", "RMS θ̇̂−θ̇ [rad/s]"),
-                       ("settling_time", "settling time [s] (successes)"),
-                       ("time_to_failure", "time to failure [s] (failures)")):
-        m, se = s[key]["mean"], s[key]["se"]
+    rows = [("cost", "J = ∫xᵀQx + uᵀRu dt (successes)", 1.0), ("rms_theta", "RMS θ [rad]", 1.0),
+            ("max_abs_theta", "max |θ| [rad]", 1.0), ("rms_p", "RMS p [m]", 1.0),
+            ("max_abs_p", "max |p| [m]", 1.0), ("rms_u", "RMS u [N]", 1.0),
+            ("max_abs_u", "max |u| [N]", 1.0),
+            ("saturated_fraction", "time saturated [% of the episode]", 100.0),
+            ("rms_est_err_p", "RMS p̂−p [m]", 1.0), ("rms_est_err_theta", "RMS θ̂−θ [rad]", 1.0),
+            ("rms_est_err_p_dot", "RMS ṗ̂−ṗ [m/s]", 1.0),
+            ("rms_est_err_theta_dot", "RMS θ̇̂−θ̇ [rad/s]", 1.0)]
+    # Under noise |θ| never stays inside the settling band, so the "last time outside it" is the
+    # episode's end: the settling time means something only for noise-free runs.
+    if sc["noise"]["scale"] == 0:
+        rows.append(("settling_time", f"settling time [s] (|θ| ≤ {sc['settle_band']:g} rad "
+                                      "from then on; successes)", 1.0))
+    rows.append(("time_to_failure", "time to failure [s] (failures)", 1.0))
+    for key, label, unit in rows:
+        m, se = s[key]["mean"] * unit, s[key]["se"] * unit
         cell = "–" if m != m else (f"{m:.4g}" if se != se else f"{m:.4g} ± {se:.2g}")
         t.add_row(escape(label), cell)
     con.print(t)
+    if sc["noise"]["scale"] != 0:
+        con.print("settling time: not reported under noise (|θ| keeps leaving the "
+                  f"{sc['settle_band']:g} rad band); run with --noise-scale 0 for it")
 
 
 # ---- bench ---------------------------------------------------------------------------------------

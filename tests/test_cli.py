@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import signal
@@ -253,3 +254,48 @@ def test_a_second_run_into_a_busy_folder_is_refused(tmp_path, capsys):
     (out / ".lock").write_text("999999999")                # a dead writer's stale lock
     assert main(["bench", str(spec), "--out", str(out), "--resume", "--quiet"]) == 0
     assert not (out / ".lock").exists()
+
+
+# ---- what a new user tripped on: negative values, help ---------------------------------------------
+def test_negative_numbers_and_lists_are_taken_in_their_natural_form(capsys):
+    assert main(["design", "--observer-poles", "-2,-3,-4,-5", "--q", "1,2,3,4", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    poles = sorted(complex(re, im).real for re, im in d["L_luenberger_poles"])
+    assert poles == pytest.approx([-5, -4, -3, -2], abs=1e-9)
+    assert main(["design", "--observer-poles", "-1+2j,-1-2j,-3,-4", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert sorted(complex(re, im).imag for re, im in d["L_luenberger_poles"]) == \
+        pytest.approx([-2, 0, 0, 2], abs=1e-9)
+    assert main(["run", "--theta0", "-0.1", "--episodes", "1", "--duration", "0.5", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["config"]["scenario"]["x0"][1] == -0.1
+    with pytest.raises(SystemExit) as exit_:                          # still a clean error
+        main(["run", "--theta0", "-", "--episodes", "1"])
+    assert exit_.value.code == 2
+    assert "error: argument --theta0: expected a number" in capsys.readouterr().err
+
+
+def test_every_subcommand_and_option_has_help():
+    from pendulum_lqg.cli import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    assert set(sub.choices) == {"design", "run", "bench", "report", "perf"}
+    for name, p in sub.choices.items():
+        assert p.description, f"{name} has no description"
+        for action in p._actions:
+            if isinstance(action, argparse._HelpAction):
+                continue
+            assert action.help and len(action.help) > 10, f"{name} {action.dest} has no help"
+            takes_value = action.nargs != 0 and action.option_strings
+            if takes_value and action.dest not in ("policy", "out", "record", "model", "address"):
+                assert "default" in action.help, f"{name} {action.dest}: help names no default"
+
+
+def test_run_summary_reports_settling_time_only_noise_free(capsys):
+    assert main(["run", "--episodes", "2", "--duration", "2", "--noise-scale", "0"]) == 0
+    quiet = capsys.readouterr().out
+    assert "settling time [s] (|θ| ≤ 0.02 rad from then on; successes)" in quiet
+    assert "time saturated [% of the episode]" in quiet
+    assert main(["run", "--episodes", "2", "--duration", "2"]) == 0
+    noisy = capsys.readouterr().out
+    assert "settling time [s]" not in noisy and "not reported under noise" in noisy
