@@ -4,7 +4,8 @@ Definitions (all integrals use the physics step h and the state at the start of 
 including the step in which the episode failed):
 
 * ``cost`` — ``J = ∫ xᵀQx + uᵀRu dt`` (no ½; the optimal-cost check compares with ``x₀ᵀPx₀``);
-* ``rms_*`` — ``sqrt(∫ s² dt / t_alive)``; ``max_abs_*`` — the largest magnitude seen;
+* ``rms_*`` — ``sqrt(∫ s² dt / t_alive)``; ``max_abs_*`` — the largest magnitude seen, the
+  sample that crossed a failure limit included;
 * ``saturated_fraction`` — share of the alive time with ``|u|`` at the actuator limit;
 * ``rms_est_err_*`` — RMS over control samples of ``x̂[n] − x[n]`` (the estimate the controller used);
 * ``settling_time`` — the last time ``|θ|`` was above the scenario's ``settle_band`` (0 if never);
@@ -116,9 +117,12 @@ class MetricsAccumulator:
 
     def accumulate(self, ids: np.ndarray, z: np.ndarray, u: np.ndarray,
                    x_hat: np.ndarray | None, failed: np.ndarray, reason: np.ndarray,
-                   fail_step: np.ndarray | None, t: np.ndarray) -> np.ndarray:
+                   fail_step: np.ndarray | None, t: np.ndarray,
+                   x_fail: np.ndarray | None = None) -> np.ndarray:
         """Add one control period (``z``, ``fail_step``: see :func:`period_integrals`; ``u`` (n,)
-        the applied force); returns the period's cost per row."""
+        the applied force; ``x_fail`` (n, 4) the state at the end of each row's failing step —
+        the sample that crossed the limit, counted in the ``max_abs_*`` metrics); returns the
+        period's cost per row."""
         h, k = self.h, self.k
         x_start = z[:, 0, :4]
         z, t_alive, cost = period_integrals(z, fail_step, h=h, weights=self.weights)
@@ -145,6 +149,9 @@ class MetricsAccumulator:
             self.n_est[ids] += 1
         if fail_step is not None:
             f = ids[failed]
+            if x_fail is not None:          # the crossing sample (nan of a diverged row ignored)
+                self.max_theta[f] = np.fmax(self.max_theta[f], np.abs(x_fail[failed, 1]))
+                self.max_p[f] = np.fmax(self.max_p[f], np.abs(x_fail[failed, 0]))
             self.fail_time[f] = t[failed] + (fail_step[failed] + 1) * h
             self.reason[f] = reason[failed]
             self.done[f] = True

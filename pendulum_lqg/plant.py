@@ -95,16 +95,26 @@ class ModelOverrides:
         return all(getattr(self, f.name) is None for f in dataclasses.fields(self))
 
 
+def _named_geom(spec: mujoco.MjSpec, name: str, why: str) -> mujoco.MjsGeom:
+    """The geom ``name``, which the override ``why`` edits (only then is the name required)."""
+    geom = spec.geom(name)
+    if geom is None:
+        raise ConfigError(f"model: the override {why} needs a geom named {name!r}")
+    return geom
+
+
 def _apply_overrides(spec: mujoco.MjSpec, ov: ModelOverrides) -> None:
-    pole = spec.geom(POLE_GEOM)
-    cart = spec.geom(CART_GEOM)
-    if pole is None or cart is None:
-        raise ConfigError(f"model: overrides need geoms named {POLE_GEOM!r} and {CART_GEOM!r}")
     if ov.pole_mass is not None or ov.pole_mass_scale is not None:
+        pole = _named_geom(spec, POLE_GEOM, "pole_mass" if ov.pole_mass is not None
+                           else "pole_mass_scale")
         pole.mass = ov.pole_mass if ov.pole_mass is not None else pole.mass * ov.pole_mass_scale
     if ov.cart_mass is not None or ov.cart_mass_scale is not None:
+        cart = _named_geom(spec, CART_GEOM, "cart_mass" if ov.cart_mass is not None
+                           else "cart_mass_scale")
         cart.mass = ov.cart_mass if ov.cart_mass is not None else cart.mass * ov.cart_mass_scale
     if ov.pole_length is not None or ov.pole_length_scale is not None:
+        pole = _named_geom(spec, POLE_GEOM, "pole_length" if ov.pole_length is not None
+                           else "pole_length_scale")
         start, end = np.array(pole.fromto[:3]), np.array(pole.fromto[3:])
         old = float(np.linalg.norm(end - start))
         new = ov.pole_length if ov.pole_length is not None else old * ov.pole_length_scale
@@ -230,9 +240,22 @@ class Plant:
 
     @property
     def pole_length(self) -> float:
-        """Full length of the pole rod (hinge to tip) [m], from the pole geom."""
-        g = self.model.geom(POLE_GEOM)
-        return float(2.0 * g.size[1])
+        """Full length of the pole rod (hinge to tip) [m]: from the geom named ``pole`` if there is
+        one, else the farthest reach from the hinge of the pole body's geoms (centre distance plus
+        half-length for capsules and cylinders, bounding radius for the others)."""
+        m = self.model
+        gid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, POLE_GEOM)
+        if gid >= 0:
+            return float(2.0 * m.geom_size[gid, 1])
+        body = m.body(POLE_BODY).id
+        hinge = m.jnt_pos[m.joint(HINGE).id]
+        reach = 0.0
+        for g in np.nonzero(m.geom_bodyid == body)[0]:
+            centre = float(np.linalg.norm(m.geom_pos[g] - hinge))
+            long = int(m.geom_type[g]) in (int(mujoco.mjtGeom.mjGEOM_CAPSULE),
+                                           int(mujoco.mjtGeom.mjGEOM_CYLINDER))
+            reach = max(reach, centre + (m.geom_size[g, 1] if long else m.geom_rbound[g]))
+        return reach
 
     @property
     def pole_inertia_com(self) -> float:

@@ -368,8 +368,9 @@ class Simulator:
             fail_step = np.where(bad_u, 0, k if fail_step is None else fail_step)
         z = buf[:, :k]
         if self.metrics is not None:
+            x_fail = None if fail_step is None else buf[np.arange(n), fail_step + 1, :4]
             cost = self.metrics.accumulate(self.ids, z, u, x_hat, failed, reason, fail_step,
-                                           self.t)
+                                           self.t, x_fail)
         else:
             cost = period_integrals(z, fail_step, h=self.h, weights=self.weights)[2]
         self.t = self.t + self.dt

@@ -205,3 +205,24 @@ def test_bench_with_your_own_model(tmp_path, capsys):
         (tmp_path / "shipped" / "episodes.csv").read_bytes()
     with pytest.raises(Exception, match="model_file: no file"):
         parse_spec({"model_file": "nowhere.xml"}, base_dir=tmp_path)
+
+
+def test_a_model_whose_geoms_have_other_names_works_until_an_override_needs_them(tmp_path,
+                                                                                 capsys):
+    xml = (data_dir("models") / "cartpole.xml").read_text()
+    renamed = xml.replace('name="cart" class="cart"', 'name="chassis" class="cart"', 1) \
+                 .replace('name="pole" class="pole"', 'name="rod" class="pole"', 1)
+    assert renamed.count('name="rod"') == 1 and renamed.count('name="chassis"') == 1
+    path = tmp_path / "renamed.xml"
+    path.write_text(renamed)
+    shipped, mine = load_plant(), load_plant(path)
+    assert mine.parameters() == pytest.approx(shipped.parameters(), rel=1e-12)
+    assert main(["run", "--model", str(path), "--episodes", "3", "--duration", "1", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["success_rate"] == 1.0
+    from pendulum_lqg.errors import ConfigError
+    from pendulum_lqg.plant import ModelOverrides
+
+    with pytest.raises(ConfigError, match="the override pole_mass_scale needs a geom named 'pole'"):
+        load_plant(path, overrides=ModelOverrides(pole_mass_scale=2.0))
+    with pytest.raises(ConfigError, match="the override cart_mass needs a geom named 'cart'"):
+        load_plant(path, overrides=ModelOverrides(cart_mass=2.0))

@@ -200,3 +200,20 @@ def test_wilson_interval_reference_values():
     assert lo == pytest.approx(0.8882, abs=1e-4) and hi == pytest.approx(0.9785, abs=1e-4)
     lo, hi = wilson_interval(0, 10)
     assert lo == 0.0 and hi == pytest.approx(0.2775, abs=1e-4)
+
+
+def test_max_abs_theta_of_a_failed_episode_includes_the_crossing_sample(plant):
+    """A pole that fell past θ_max reads max |θ| > θ_max: exactly the first sample beyond it."""
+    from pendulum_lqg.plugins import build_policy
+
+    scenario = Scenario(x0=(0.0, 0.45, 0.0, 1.0), duration=2.0)
+    policy = build_policy("dlqr+luenberger", plant=plant, scenario=scenario)
+    for backend in ("rollout", "step"):
+        res = run_episodes(plant, scenario, policy, seed=0, episodes=range(3), backend=backend,
+                           trajectory=True)
+        for row, tr in zip(res.rows, res.trajectories, strict=True):
+            assert row["failure_reason"] == "pole_fell"
+            theta = np.abs(tr.states[:, 1])
+            first = int(np.argmax(theta > scenario.theta_max))
+            assert row["max_abs_theta"] == theta[first] > scenario.theta_max
+            assert row["time_to_failure"] == pytest.approx(tr.t_physics[first])
