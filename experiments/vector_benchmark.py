@@ -2,7 +2,7 @@
 
 Both come from ``gymnasium.make_vec("pendulum_lqg/CartPoleLQG-v0", num_envs=N)``: the registered
 vector entry point (one batched ``mujoco.rollout`` per step) and ``vectorization_mode="sync"``
-(N single envs in a Python loop). Both run the same episodes (same seeds, SAME_STEP autoreset)
+(N single envs in a Python loop). Both run the same episodes (same seeds, NEXT_STEP autoreset)
 driven by the batched LQG agent; only ``step`` calls are timed. The three measurements below take
 turns, one timed run each per round, and each keeps its best run.
 
@@ -53,8 +53,7 @@ def main() -> None:
     args = ap.parse_args()
     n = args.num_envs
     native = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n)
-    sync = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n, vectorization_mode="sync",
-                        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP})
+    sync = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n, vectorization_mode="sync")
     k, nthread = native.unwrapped.frame_skip, native.unwrapped.nthread
     # the sync env's sub-envs are plain single envs: the agent acts on the stacked batch
     agent = LQGAgent(native)

@@ -21,6 +21,7 @@ and the results schema (:data:`SCHEMA_VERSION`).
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import PurePath
 from typing import TYPE_CHECKING, Any
@@ -71,6 +72,23 @@ def __getattr__(name: str) -> Any:
         return PolicyContext
     raise AttributeError(f"module 'pendulum_lqg' has no attribute {name!r}")
 
+
+def _headless_gl_default() -> None:
+    """Choose MuJoCo's EGL backend on a Linux machine without a display, if nothing was chosen.
+
+    MuJoCo reads ``MUJOCO_GL`` once, when it is imported, and its default (GLFW) needs a display:
+    without this, rendering (and Gymnasium's ``check_env``) fail on a headless machine. Nothing
+    changes when ``MUJOCO_GL`` is set, a display exists, or MuJoCo is already imported (then the
+    env's ``render`` says in one line what to set).
+    """
+    if ("MUJOCO_GL" in os.environ or "mujoco" in sys.modules
+            or not sys.platform.startswith("linux")
+            or os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        return
+    os.environ["MUJOCO_GL"] = "egl"
+
+
+_headless_gl_default()
 
 #: The ``pendulum-lqg`` console script: its process needs no Gymnasium registration.
 _CLI_PROCESS = PurePath(sys.argv[0]).name == "pendulum-lqg" if sys.argv else False

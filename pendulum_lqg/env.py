@@ -138,7 +138,7 @@ def step_reward(cost: np.ndarray | np.float64, failed: np.ndarray | bool, scale_
 
 def _action_force(action: object, n: int) -> np.ndarray:
     """Forces (n,) float64 from an action of shape (1,) (single env) or (n, 1) / (n,) (vector)."""
-    if type(action) is np.ndarray and action.size == n and action.ndim <= 2 \
+    if type(action) is np.ndarray and action.shape in ((n,), (n, 1)) \
             and action.dtype.kind == "f":                      # the common case, kept cheap
         u = action.astype(np.float64).reshape(n)
         if (math.isfinite(u[0]) if n == 1 else bool(np.isfinite(u).all())):
@@ -148,13 +148,77 @@ def _action_force(action: object, n: int) -> np.ndarray:
         u = np.asarray(action, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise ShapeError(f"action: expected {n} force(s) in newtons, got {action!r}") from exc
-    if u.size != n or u.ndim > 2:
+    if u.shape not in ((n,), (n, 1)) and not (n == 1 and u.shape == ()):
         want = "(1,)" if n == 1 else f"({n}, 1)"
         raise ShapeError(f"action: expected shape {want}, found {u.shape}")
     u = u.reshape(n)
     if not np.all(np.isfinite(u)):
         raise PendulumLQGError(f"action: expected finite forces, got {u!r}")
     return u
+
+
+class _Actions:
+    """The action space and the map from actions to requested forces [N].
+
+    ``normalize_action=False``: the action is the force, ``Box(lo, hi)`` from the actuator's
+    ``ctrlrange``; ``True``: an action in ``[−1, 1]`` maps linearly onto ``[lo, hi]``. Either
+    way the core saturates the force to ``[lo, hi]``.
+    """
+
+    def __init__(self, plant: Plant, normalize: object) -> None:
+        if not isinstance(normalize, bool):
+            raise ConfigError(f"normalize_action: expected True or False, got {normalize!r}")
+        self.normalize = normalize
+        self.lo, self.hi = plant.force_limit
+        bound = (-1.0, 1.0) if normalize else (self.lo, self.hi)
+        self.space = spaces.Box(np.float32(bound[0]), np.float32(bound[1]), shape=(1,),
+                                dtype=np.float32)
+
+    def forces(self, action: object, n: int) -> np.ndarray:
+        u = _action_force(action, n)
+        if self.normalize:
+            u = self.lo + (u + 1.0) * (0.5 * (self.hi - self.lo))
+        return u
+
+    def applied(self, u: np.ndarray) -> np.ndarray:
+        """The force the actuator applies (saturated), as the core applies it."""
+        return np.minimum(np.maximum(u, self.lo), self.hi)
+
+
+class _Frames:
+    """Offscreen frames of the cart-pole at given states: a side view tracking the cart."""
+
+    def __init__(self, plant: Plant, width: int, height: int) -> None:
+        self.plant, self.width, self.height = plant, width, height
+        self._renderer: mujoco.Renderer | None = None
+        self._data: mujoco.MjData | None = None
+        self._camera: mujoco.MjvCamera | None = None
+
+    def frame(self, x: np.ndarray) -> np.ndarray:
+        """An RGB image (height, width, 3) uint8 of the state ``x = [p, θ, ṗ, θ̇]``."""
+        model = self.plant.model
+        if self._renderer is None:
+            self._renderer = _make_renderer(model, self.height, self.width)
+            self._data = mujoco.MjData(model)
+            cam = mujoco.MjvCamera()
+            cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+            cam.trackbodyid = model.body(CART_BODY).id
+            cam.distance = CAMERA_DISTANCE_POLE_LENGTHS * self.plant.pole_length
+            cam.azimuth, cam.elevation = 90.0, -10.0      # from −y, x to the right: a side view
+            self._camera = cam
+        assert self._data is not None
+        self.plant.set_state(self._data, x)
+        self._renderer.update_scene(self._data, camera=self._camera)
+        return self._renderer.render()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+        self._renderer = self._data = self._camera = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        # GL resources (and the camera, which does not pickle) are made again on demand
+        return {**self.__dict__, "_renderer": None, "_data": None, "_camera": None}
 
 
 class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -175,9 +239,12 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     |-----|--------------------------|-----|-----|---------------|-------|-------------|
     | 0   | horizontal force on cart | -10 | 10  | force         | slide | force (N)   |
 
-    Forces outside the range are saturated (as in the benchmark). Actions are applied at float64
-    precision: a float64 action is used as given (the LQG agent returns float64, so its forces —
-    and J — equal the benchmark's bit for bit); a float32 one is widened.
+    Units: newtons. Forces outside the range are saturated (clipped to ±10 N, as in the
+    benchmark); `info["force"]` is the force actually applied. With `normalize_action=True` the
+    action space is `Box(-1, 1, (1,), float32)` and an action `a` requests the force
+    `lo + (a + 1)/2 · (hi − lo)` (±1 ↔ ±10 N). Actions are applied at float64 precision: a
+    float64 action is used as given (the LQG agent returns float64, so its forces — and J — equal
+    the benchmark's bit for bit); a float32 one is widened. A non-finite action is an error.
 
     ## Observation Space
     `observation_mode="measurement"` (default, the LQG problem): the noisy measurement
@@ -216,6 +283,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     | `y_true`       | the noise-free measurement `[p, θ]` (2,)                         |
     | `failure_reason` | `""`, `"pole_fell"`, `"track_limit"` or `"diverged"`           |
     | `time`         | time of the new sample [s]                                       |
+    | `force`        | the force applied over the step [N] (saturated; 0 after reset)   |
 
     ## Starting State
     `x₀ ~ N(x0, diag(x0_std²))`, default `x0 = [0, 0.1, 0, 0]` (the pole tilted 0.1 rad), `x0_std = 0`:
@@ -250,6 +318,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     | `reward_scale`         | float (J/s)          | `10.0`        | see Rewards                       |
     | `model_overrides`      | mapping              | `None`        | simulated-plant changes [3]       |
     | `model_path`           | str                  | bundled XML   | another MJCF cart-pole            |
+    | `normalize_action`     | bool                 | `False`       | actions in [−1, 1] (see Action Space) |
     | `render_mode`          | str or None          | `None`        | "rgb_array": `mujoco.Renderer` [4] |
     | `width`, `height`      | int (px)             | `640`, `480`  | image size (≤ offscreen buffer)   |
 
@@ -261,8 +330,13 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
 
     Invalid values raise `pendulum_lqg.errors.ConfigError` naming the parameter.
 
+    Initial-state randomisation: `x0_std` (default 0: the lecture's fixed start) draws each
+    episode's `x₀ ~ N(x0, diag(x0_std²))`, e.g. `x0_std=(0.5, 0.2, 0.5, 0.5)` for a spread of
+    starts; `x0` sets the mean (default `[0, 0.1, 0, 0]`).
+
     ## Version History
     * v0: Initial version (the lecture scenario; reward `exp(−c/(s·T))`, 0 on failure).
+      pendulum-lqg 0.2.0 added `normalize_action` and `info["force"]` (defaults unchanged).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 100}  # noqa: RUF012
@@ -277,8 +351,8 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
                  cost_Q: Sequence[float] = (1.0, 1.0, 1.0, 1.0), cost_R: float = 1.0,
                  reward_scale: float = DEFAULT_REWARD_SCALE,
                  model_overrides: Mapping[str, float] | ModelOverrides | None = None,
-                 model_path: str | None = None, render_mode: str | None = None,
-                 width: int = 640, height: int = 480) -> None:
+                 model_path: str | None = None, normalize_action: bool = False,
+                 render_mode: str | None = None, width: int = 640, height: int = 480) -> None:
         self.config = EnvConfig.build(
             control_period=control_period, duration=duration, observation_mode=observation_mode,
             noise_scale=noise_scale, process_noise=process_noise, process_density=process_density,
@@ -292,21 +366,19 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         self.observation_mode = self.config.observation_mode
         self.plant, self._sim = self.config.make_simulator(nthread=0)
         self.width, self.height = _image_size(self.plant, width, height)
+        self._actions = _Actions(self.plant, normalize_action)
+        self._frames = _Frames(self.plant, self.width, self.height)
         #: control period T [s] and physics steps per env step
         self.dt, self.frame_skip = self._sim.dt, self._sim.k
         self.max_episode_steps = self._sim.n_periods
         self._scale_dt = self.config.reward_scale * self.dt
         self.metadata = {**type(self).metadata, "render_fps": round(1.0 / self.dt)}
-        lo, hi = self.plant.force_limit
-        self.action_space = spaces.Box(np.float32(lo), np.float32(hi), shape=(1,),
-                                       dtype=np.float32)
+        self.action_space = self._actions.space
         dim = 2 if self.observation_mode == "measurement" else 4
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(dim,), dtype=np.float64)
         self._running_cost = 0.0
         self._ended = False
-        self._renderer: mujoco.Renderer | None = None
-        self._render_data: mujoco.MjData | None = None
-        self._camera: mujoco.MjvCamera | None = None
+        self._started = False
 
     # ---- episode -----------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None,
@@ -321,15 +393,19 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         self._sim.reset([self.np_random])
         self._running_cost = 0.0
         self._ended = False
-        return self._observe(), self._info(0.0, FAIL_NONE)
+        self._started = True
+        return self._observe(), self._info(0.0, FAIL_NONE, 0.0)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, SupportsFloat, bool, bool,
                                                  dict[str, Any]]:
         """One control period with the force ``action[0]`` [N] held."""
+        if not self._started:
+            raise PendulumLQGError("step: call reset() before the first step")
         if self._ended:
             raise PendulumLQGError("step: the episode has failed; call reset() first")
         sim = self._sim
-        res = sim.step(_action_force(action, 1))
+        u = self._actions.forces(action, 1)
+        res = sim.step(u)
         failed = bool(res.failed[0])
         reward = step_reward(res.cost[0], failed, self._scale_dt)
         cost = float(res.cost[0])
@@ -340,7 +416,8 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         else:
             obs = self._observe()
         truncated = int(sim.period[0]) >= sim.n_periods         # TimeLimit's rule
-        return obs, reward, failed, truncated, self._info(cost, int(res.reason[0]))
+        force = float(self._actions.applied(u)[0])
+        return obs, reward, failed, truncated, self._info(cost, int(res.reason[0]), force)
 
     def _observe(self) -> np.ndarray:
         y = self._sim.measure()   # always: it draws this period's process noise too
@@ -350,11 +427,11 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         x = self._sim.x[0]
         return (x[:2] if self.observation_mode == "measurement" else x).copy()
 
-    def _info(self, cost: float, reason: int) -> dict[str, Any]:
+    def _info(self, cost: float, reason: int, force: float) -> dict[str, Any]:
         x = self._sim.x[0]
         return {"cost": cost, "running_cost": self._running_cost, "state": x.copy(),
                 "y_true": x[:2].copy(), "failure_reason": FAIL_REASONS[reason],
-                "time": float(self._sim.t[0])}
+                "time": float(self._sim.t[0]), "force": force}
 
     @property
     def running_cost(self) -> float:
@@ -368,38 +445,32 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
             gym.logger.warn("render: called without a render_mode; make the env with "
                             "render_mode='rgb_array'")
             return None
-        model = self.plant.model
-        if self._renderer is None:
-            self._renderer = mujoco.Renderer(model, self.height, self.width)
-            self._render_data = mujoco.MjData(model)
-            cam = mujoco.MjvCamera()
-            cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
-            cam.trackbodyid = model.body(CART_BODY).id
-            cam.distance = CAMERA_DISTANCE_POLE_LENGTHS * self.plant.pole_length
-            cam.azimuth, cam.elevation = 90.0, -10.0      # from −y, x to the right: a side view
-            self._camera = cam
-        assert self._render_data is not None
         x = self._sim.x[0] if hasattr(self._sim, "x") else np.zeros(4)
-        self.plant.set_state(self._render_data, x)
-        self._renderer.update_scene(self._render_data, camera=self._camera)
-        return self._renderer.render()
+        return self._frames.frame(x)
 
     def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-            self._render_data = None
+        self._frames.close()
         self._sim.close()
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = self.__dict__.copy()
-        # GL resources (and the camera, which does not pickle) are made again on demand
-        state["_renderer"] = state["_render_data"] = state["_camera"] = None
-        return state
 
 
 #: ``FAIL_REASONS`` indexed by code, for the vector infos.
 _REASON_NAMES = np.array([FAIL_REASONS[c] for c in range(len(FAIL_REASONS))], dtype=object)
+
+
+def _make_renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Renderer:
+    """``mujoco.Renderer``, or a one-line error that says which OpenGL backend to choose."""
+    try:
+        return mujoco.Renderer(model, height, width)
+    except Exception as exc:
+        import os
+
+        backend = os.environ.get("MUJOCO_GL", "glfw (the default)")
+        detail = " ".join(str(exc).split())[:160]
+        raise PendulumLQGError(
+            f"render: MuJoCo could not create an OpenGL context with MUJOCO_GL={backend} "
+            f"({type(exc).__name__}: {detail}); on a machine without a display set MUJOCO_GL=egl "
+            "(or osmesa) before mujoco is first imported (pendulum_lqg does this itself when it "
+            "is imported first)") from exc
 
 
 def _image_size(plant: Plant, width: int, height: int) -> tuple[int, int]:
@@ -429,14 +500,27 @@ class CartPoleLQGVectorEnv(VectorEnv):
     entropy), so sub-env ``i`` gives exactly the episodes of a single env reset with the same seed
     — after an autoreset too (the generator continues, as a single env's ``reset()`` without a seed).
 
-    Autoreset mode ``SAME_STEP``: a sub-env that ends is reset within the same ``step``; the
-    returned observation and ``info`` are the new episode's, and ``info["final_obs"]`` /
-    ``info["final_info"]`` (with masks ``_final_obs`` / ``_final_info``) hold the last ones, as
-    ``SyncVectorEnv(autoreset_mode=SAME_STEP)`` does. Rendering is not supported.
+    Autoreset follows Gymnasium's conventions and ``SyncVectorEnv`` step for step
+    (``metadata["autoreset_mode"]``):
+
+    * ``NEXT_STEP`` (default, as ``SyncVectorEnv``): the step in which a sub-env ends returns its
+      last observation; the next step ignores that sub-env's action and returns its reset
+      observation and ``info``, with reward 0 and ``terminated = truncated = False``;
+    * ``SAME_STEP``: the ended sub-env is reset within the same step; the returned observation and
+      ``info`` are the new episode's, ``info["final_obs"]`` / ``info["final_info"]`` (masks
+      ``_final_obs`` / ``_final_info``) the last ones;
+    * ``DISABLED``: ended sub-envs wait for ``reset(options={"reset_mask": mask})``.
+
+    ``reset(options={"reset_mask": mask})`` resets only the masked sub-envs in every mode.
+    ``render_mode="rgb_array"``: ``render()`` returns one frame per sub-env (a tuple, as
+    ``SyncVectorEnv``). Per-sub-env ``wrappers=`` cannot be given to ``gymnasium.make_vec`` with
+    any vector entry point (Gymnasium refuses them); use ``vectorization_mode="sync"`` for those
+    (same episodes, slower), or wrap this env in ``gymnasium.wrappers.vector`` wrappers.
 
     Parameters
     ----------
     num_envs : number of sub-envs
+    autoreset_mode : an ``AutoresetMode`` or its name (default ``NEXT_STEP``)
     max_episode_steps : truncate after this many steps (``gym.make_vec(id, N,
         max_episode_steps=M)`` passes it); the env's own ``duration`` also truncates, whichever
         comes first (``TimeLimit``'s rule: a sub-env that fails on its last step is both
@@ -445,10 +529,11 @@ class CartPoleLQGVectorEnv(VectorEnv):
     the other keywords : as :class:`CartPoleLQGEnv`
     """
 
-    metadata: dict[str, Any] = {"render_modes": [],  # noqa: RUF012
-                                "autoreset_mode": AutoresetMode.SAME_STEP}
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"],  # noqa: RUF012
+                                "autoreset_mode": AutoresetMode.NEXT_STEP}
 
-    def __init__(self, num_envs: int, *, max_episode_steps: int | None = None,
+    def __init__(self, num_envs: int, *, autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+                 max_episode_steps: int | None = None,
                  nthread: int | None = None, control_period: float = 0.01,
                  duration: float = 10.0, observation_mode: ObservationMode = "measurement",
                  noise_scale: float = 1.0, process_noise: Literal["state", "force"] = "state",
@@ -459,11 +544,13 @@ class CartPoleLQGVectorEnv(VectorEnv):
                  cost_Q: Sequence[float] = (1.0, 1.0, 1.0, 1.0), cost_R: float = 1.0,
                  reward_scale: float = DEFAULT_REWARD_SCALE,
                  model_overrides: Mapping[str, float] | ModelOverrides | None = None,
-                 model_path: str | None = None, render_mode: str | None = None) -> None:
+                 model_path: str | None = None, normalize_action: bool = False,
+                 render_mode: str | None = None, width: int = 640, height: int = 480) -> None:
         self.num_envs = _positive_int("num_envs", num_envs)
-        if render_mode is not None:
-            raise ConfigError(f"render_mode: the vector env does not render, got {render_mode!r}")
-        self.render_mode = None
+        self.autoreset_mode = _autoreset_mode(autoreset_mode)
+        if render_mode is not None and render_mode != "rgb_array":
+            raise ConfigError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
+        self.render_mode = render_mode
         self.config = EnvConfig.build(
             control_period=control_period, duration=duration, observation_mode=observation_mode,
             noise_scale=noise_scale, process_noise=process_noise, process_density=process_density,
@@ -476,6 +563,8 @@ class CartPoleLQGVectorEnv(VectorEnv):
         self.scenario = self.config.scenario
         self.observation_mode = self.config.observation_mode
         self.plant, self._sim = self.config.make_simulator(nthread=nthread)
+        width, height = _image_size(self.plant, width, height)
+        self._frames = _Frames(self.plant, width, height)
         self.dt, self.frame_skip = self._sim.dt, self._sim.k
         #: rollout threads of the batched core
         self.nthread = self._sim.nthread
@@ -484,10 +573,10 @@ class CartPoleLQGVectorEnv(VectorEnv):
             limit = min(limit, _positive_int("max_episode_steps", max_episode_steps))
         self.max_episode_steps = limit
         self._scale_dt = self.config.reward_scale * self.dt
-        self.metadata = {**type(self).metadata, "render_fps": round(1.0 / self.dt)}
-        lo, hi = self.plant.force_limit
-        self.single_action_space = spaces.Box(np.float32(lo), np.float32(hi), shape=(1,),
-                                              dtype=np.float32)
+        self.metadata = {**type(self).metadata, "render_fps": round(1.0 / self.dt),
+                         "autoreset_mode": self.autoreset_mode}
+        self._actions = _Actions(self.plant, normalize_action)
+        self.single_action_space = self._actions.space
         dim = 2 if self.observation_mode == "measurement" else 4
         self.single_observation_space = spaces.Box(-np.inf, np.inf, shape=(dim,),
                                                    dtype=np.float64)
@@ -496,16 +585,24 @@ class CartPoleLQGVectorEnv(VectorEnv):
         self._gens: list[np.random.Generator] = []
         self._running_cost = np.zeros(self.num_envs)
         self._all = np.arange(self.num_envs)
+        self._waiting = np.zeros(self.num_envs, dtype=bool)   # ended, not yet reset
+        self._obs = np.zeros((self.num_envs, dim))
+        self._started = False
 
     def reset(self, *, seed: int | Sequence[int] | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
-        """Reset every sub-env, as ``SyncVectorEnv`` resets its sub-envs.
+        """Reset every sub-env (or those of ``options["reset_mask"]``), as ``SyncVectorEnv``.
 
         ``seed``: an int ``s`` (sub-env i gets ``s + i``), a list of ``num_envs`` seeds (``None``
         entries allowed), or ``None``. A sub-env without a seed continues its generator (fresh
         entropy the first time), as a single env's ``reset()`` does.
         """
         n = self.num_envs
+        options = dict(options or {})
+        mask = options.pop("reset_mask", None)
+        if options:
+            raise ConfigError(f"options: unknown key {sorted(options)[0]!r}; reset takes only "
+                              "'reset_mask'")
         seeds: list[int | None]
         if seed is None or isinstance(seed, int | np.integer):
             super().reset(seed=None if seed is None else int(seed))
@@ -516,57 +613,97 @@ class CartPoleLQGVectorEnv(VectorEnv):
                                                         and not isinstance(s, bool))
                                           for s in seeds):
                 raise ConfigError(f"seed: expected {n} integer seeds (or None), got {seed!r}")
-        if options:
-            raise ConfigError(f"options: unknown key {sorted(options)[0]!r}; reset takes none")
-        self._gens = [seeding.np_random(None if s is None else int(s))[0]
-                      if s is not None or i >= len(self._gens) else self._gens[i]
-                      for i, s in enumerate(seeds)]
-        self._sim.reset(self._gens, ids=self._all)
-        self._running_cost = np.zeros(n)
-        y = self._sim.measure()
-        obs = y if self.observation_mode == "measurement" else self._sim.x.copy()
-        return obs, self._infos(self._all, np.zeros(n), np.full(n, FAIL_NONE))
+        if mask is not None:
+            if not self._started:
+                raise ConfigError("options: reset_mask needs a first reset() of every sub-env")
+            mask = np.asarray(mask)
+            if mask.shape != (n,) or mask.dtype != np.bool_ or not mask.any():
+                raise ConfigError(f"options: reset_mask must be a bool array of shape ({n},) "
+                                  f"with at least one True, got {mask!r}")
+            rows = np.nonzero(mask)[0]
+        else:
+            rows = self._all
+        gens = self._gens if self._gens else [None] * n
+        self._gens = [seeding.np_random(None if seeds[i] is None else int(seeds[i]))[0]
+                      if i in set(rows.tolist()) and (seeds[i] is not None or gens[i] is None)
+                      else gens[i] for i in range(n)]  # type: ignore[misc]
+        if rows.size == n:
+            self._sim.reset(self._gens, ids=self._all)
+            self._running_cost[:] = 0.0
+            self._obs = self._observe(self._all)
+        else:
+            self._restart(rows)
+        self._waiting[rows] = False
+        self._started = True
+        zeros = np.zeros(rows.size)
+        return self._obs.copy(), self._infos(rows, zeros, np.full(rows.size, FAIL_NONE), zeros)
+
+    def _observe(self, rows: np.ndarray) -> np.ndarray:
+        """Measure ``rows`` (draws their noise for the coming period) → their observations."""
+        sim = self._sim
+        y = sim.measure() if rows.size == self.num_envs else sim.measure(rows)
+        return y if self.observation_mode == "measurement" else sim.x[rows].copy()
+
+    def _restart(self, rows: np.ndarray) -> None:
+        """New episodes in ``rows`` (their generators continue), observed."""
+        self._sim.reset([self._gens[r] for r in rows], ids=rows, rows=rows)
+        self._running_cost[rows] = 0.0
+        self._obs[rows] = self._observe(rows)
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                                                  dict[str, Any]]:
+        if not self._started:
+            raise PendulumLQGError("step: call reset() before the first step")
         sim, n = self._sim, self.num_envs
-        res = sim.step(_action_force(actions, n))
+        u = self._actions.forces(actions, n)
+        waiting = np.nonzero(self._waiting)[0]
+        if waiting.size:
+            if self.autoreset_mode == AutoresetMode.DISABLED:
+                raise PendulumLQGError(f"step: sub-env(s) {waiting.tolist()} ended; reset them with "
+                                       "reset(options={'reset_mask': mask}) first")
+            sim.park(waiting)                  # NEXT_STEP: their actions are ignored
+            u[waiting] = 0.0
+        res = sim.step(u)
         self._running_cost += res.cost
-        terminated = res.failed
+        terminated = res.failed.copy()
         truncated = sim.period >= self.max_episode_steps          # TimeLimit's rule
         reward = step_reward(res.cost, terminated, self._scale_dt)
-        obs = np.empty((n, self.single_observation_space.shape[0]))
-        alive = np.nonzero(~terminated)[0]
-        y = sim.measure(alive) if alive.size < n else sim.measure()
-        obs[alive] = y if self.observation_mode == "measurement" else sim.x[alive]
+        force = self._actions.applied(u)
+        cost, reason = res.cost.copy(), res.reason.copy()
+        if waiting.size:                       # NEXT_STEP: this step is their reset
+            terminated[waiting] = truncated[waiting] = False
+            reward[waiting] = force[waiting] = cost[waiting] = 0.0
+            reason[waiting] = FAIL_NONE
         ended = np.nonzero(terminated | truncated)[0]
-        if ended.size == 0:
-            return obs, reward, terminated, truncated, self._infos(self._all, res.cost,
-                                                                   res.reason)
         failed = np.nonzero(terminated)[0]
+        measured = np.nonzero(~terminated & ~self._waiting)[0]
+        if measured.size:
+            self._obs[measured] = self._observe(measured)
         x = sim.x
-        obs[failed] = x[failed, :2] if self.observation_mode == "measurement" else x[failed]
-        final_info = self._infos(ended, res.cost[ended], res.reason[ended])
-        final_obs = np.full(n, None, dtype=object)
-        for r in ended:
-            final_obs[r] = obs[r].copy()
-        # SAME_STEP autoreset: the ended sub-envs start their next episode now
-        sim.reset([self._gens[r] for r in ended], ids=ended, rows=ended)
-        self._running_cost[ended] = 0.0
-        y = sim.measure(ended)
-        obs[ended] = y if self.observation_mode == "measurement" else sim.x[ended]
-        cost = res.cost.copy()
-        cost[ended] = 0.0
-        reason = res.reason.copy()
-        reason[ended] = FAIL_NONE
-        infos = self._infos(self._all, cost, reason)
-        mask = np.zeros(n, dtype=bool)
-        mask[ended] = True
-        infos.update({"final_obs": final_obs, "_final_obs": mask, "final_info": final_info,
-                      "_final_info": mask.copy()})
-        return obs, reward, terminated, truncated, infos
+        self._obs[failed] = x[failed, :2] if self.observation_mode == "measurement" else x[failed]
+        if waiting.size:
+            self._restart(waiting)
+            self._waiting[waiting] = False
+        infos: dict[str, Any]
+        if self.autoreset_mode == AutoresetMode.SAME_STEP and ended.size:
+            final_info = self._infos(ended, cost[ended], reason[ended], force[ended])
+            final_obs = np.full(n, None, dtype=object)
+            for r in ended:
+                final_obs[r] = self._obs[r].copy()
+            self._restart(ended)
+            cost[ended], reason[ended], force[ended] = 0.0, FAIL_NONE, 0.0
+            infos = self._infos(self._all, cost, reason, force)
+            mask = np.zeros(n, dtype=bool)
+            mask[ended] = True
+            infos.update({"final_obs": final_obs, "_final_obs": mask, "final_info": final_info,
+                          "_final_info": mask.copy()})
+        else:
+            infos = self._infos(self._all, cost, reason, force)
+            self._waiting[ended] = True
+        return self._obs.copy(), reward, terminated, truncated, infos
 
-    def _infos(self, rows: np.ndarray, cost: np.ndarray, reason: np.ndarray) -> dict[str, Any]:
+    def _infos(self, rows: np.ndarray, cost: np.ndarray, reason: np.ndarray,
+               force: np.ndarray) -> dict[str, Any]:
         """Vector infos (arrays with ``_key`` masks) of ``rows``, as ``SyncVectorEnv`` builds."""
         n, sim = self.num_envs, self._sim
         full = rows.size == n
@@ -579,19 +716,40 @@ class CartPoleLQGVectorEnv(VectorEnv):
         values: dict[str, np.ndarray] = {
             "cost": np.zeros(n), "running_cost": np.zeros(n), "state": state,
             "y_true": state[:, :2].copy(), "failure_reason": np.full(n, None, dtype=object),
-            "time": np.zeros(n)}
+            "time": np.zeros(n), "force": np.zeros(n)}
         values["cost"][rows] = cost
         values["running_cost"][rows] = self._running_cost[rows]
         values["time"][rows] = sim.t[rows]
         values["failure_reason"][rows] = _REASON_NAMES[reason]
+        values["force"][rows] = force
         out: dict[str, Any] = {}
         for key, arr in values.items():
             out[key] = arr
             out["_" + key] = mask.copy()
         return out
 
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """One RGB frame (height, width, 3) per sub-env (``render_mode="rgb_array"``)."""
+        if self.render_mode is None:
+            gym.logger.warn("render: called without a render_mode; make the env with "
+                            "render_mode='rgb_array'")
+            return None
+        x = self._sim.x if self._started else np.zeros((self.num_envs, 4))
+        return tuple(self._frames.frame(x[i]) for i in range(self.num_envs))
+
     def close_extras(self, **kwargs: Any) -> None:
+        self._frames.close()
         self._sim.close()
+
+
+def _autoreset_mode(mode: object) -> AutoresetMode:
+    if isinstance(mode, AutoresetMode):
+        return mode
+    names = {m.name.lower(): m for m in AutoresetMode} | {m.value.lower(): m for m in AutoresetMode}
+    if isinstance(mode, str) and mode.lower() in names:
+        return names[mode.lower()]
+    raise ConfigError(f"autoreset_mode: expected one of "
+                      f"{', '.join(m.name for m in AutoresetMode)}, got {mode!r}")
 
 
 __all__ = ["CAMERA_DISTANCE_POLE_LENGTHS", "DEFAULT_REWARD_SCALE", "REWARD_FLOOR", "CartPoleLQGEnv",

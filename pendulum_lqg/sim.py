@@ -378,6 +378,14 @@ class Simulator:
         self.x = buf[:, k + 1, :4].copy()
         return StepResult(x=self.x, cost=cost, failed=failed, reason=reason, states=states)
 
+    def park(self, rows: np.ndarray) -> None:
+        """Put rows whose episode ended, and that wait for a reset, at rest upright (x = 0, no
+        process noise), so a step taken with the rest of the batch in between is harmless (vector
+        envs in Gymnasium's NEXT_STEP autoreset mode); the rows' results are discarded."""
+        self.x[rows] = 0.0
+        self._w = self._w.copy()
+        self._w[rows] = 0.0
+
     def select(self, rows: np.ndarray) -> None:
         """Keep only these rows (drop finished episodes from the batch)."""
         self.x, self.t, self.period = self.x[rows], self.t[rows], self.period[rows]

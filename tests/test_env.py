@@ -329,13 +329,15 @@ def test_agent_stabilises_99_percent_and_matches_bench_summary():
     done = np.zeros(n, dtype=bool)
     success = np.zeros(n, dtype=bool)
     cost = np.zeros(n)
+    restarting = np.zeros(0, dtype=np.int64)
     while not done.all():
         obs, _, term, trunc, info = envs.step(agent.act(obs))
+        agent.reset(restarting)        # NEXT_STEP: these rows now show their reset observation
         ended = (term | trunc) & ~done
         success[ended] = ~term[ended]
-        cost[ended] = info["final_info"]["running_cost"][ended] if ended.any() else 0.0
+        cost[ended] = info["running_cost"][ended]      # the ending step reports the final J
         done |= ended
-        agent.reset(np.nonzero(term | trunc)[0])
+        restarting = np.nonzero(term | trunc)[0]
     assert success.mean() >= 0.99
     base = envs.unwrapped
     policy = design_policy(load_plant(), base.scenario.control_period, base.scenario.noise)
@@ -362,24 +364,28 @@ def _vector_run(envs: gym.vector.VectorEnv, seed: object, actions: np.ndarray) -
     return out
 
 
+MODES = [gym.vector.AutoresetMode.NEXT_STEP, gym.vector.AutoresetMode.SAME_STEP]
+
+
+@pytest.mark.parametrize("mode", MODES)
 @pytest.mark.parametrize("kwargs", [
     {"observation_mode": "measurement"},
     {"observation_mode": "state", "max_episode_steps": 17},
 ])
-def test_native_vector_env_equals_single_envs(kwargs):
+def test_native_vector_env_equals_single_envs(kwargs, mode):
     """Same seeds → the same episodes as SyncVectorEnv over single envs, through failures,
-    truncations and SAME_STEP autoresets."""
+    truncations and autoresets, in each autoreset mode."""
     n = 5
     cfg = {"duration": 0.4, "x0_std": (0.5, 0.25, 0.5, 0.5), **kwargs}
     steps = kwargs.get("max_episode_steps")
-    native = gym.make_vec(ID, num_envs=n, **cfg)
+    native = gym.make_vec(ID, num_envs=n, autoreset_mode=mode, **cfg)
     assert isinstance(native.unwrapped, CartPoleLQGVectorEnv)
+    assert native.metadata["autoreset_mode"] == mode
     sync = gym.make_vec(ID, num_envs=n, vectorization_mode="sync",
-                        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP},
-                        **cfg)
+                        vector_kwargs={"autoreset_mode": mode}, **cfg)
     if steps is not None:   # the sync sub-envs get their TimeLimit from make's keyword
         sync = gym.make_vec(ID, num_envs=n, vectorization_mode="sync", max_episode_steps=steps,
-                            vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP},
+                            vector_kwargs={"autoreset_mode": mode},
                             **{k: v for k, v in cfg.items() if k != "max_episode_steps"})
     actions = np.random.default_rng(0).uniform(-10, 10, size=(90, n, 1))
     a = _vector_run(native, 100, actions)
@@ -390,8 +396,11 @@ def test_native_vector_env_equals_single_envs(kwargs):
         for x, y in zip(sa[1:-1], sb[1:-1], strict=True):               # reward, term, trunc
             np.testing.assert_array_equal(x, y)
         ia, ib = sa[-1], sb[-1]
-        for key in ("cost", "running_cost", "state", "y_true", "failure_reason", "time"):
+        for key in ("cost", "running_cost", "state", "y_true", "failure_reason", "time",
+                    "force"):
             np.testing.assert_array_equal(ia[key], ib[key])
+        if mode == gym.vector.AutoresetMode.NEXT_STEP and len(sa) == 5:
+            ended += int((sa[2] | sa[3]).sum())
         if "final_obs" in ib:
             ended += int(ib["_final_obs"].sum())
             np.testing.assert_array_equal(ia["_final_obs"], ib["_final_obs"])
@@ -411,9 +420,10 @@ def test_agent_on_native_vector_env_equals_agent_on_sync_env_through_autoresets(
     n = 4
     cfg = {"duration": 0.3, "x0_std": (0.5, 0.3, 0.5, 0.5),
            "observation_mode": "state" if observer == "none" else "measurement"}
-    native = gym.make_vec(ID, num_envs=n, **cfg)
+    same = gym.vector.AutoresetMode.SAME_STEP
+    native = gym.make_vec(ID, num_envs=n, autoreset_mode=same, **cfg)
     sync = gym.make_vec(ID, num_envs=n, vectorization_mode="sync",
-                        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP}, **cfg)
+                        vector_kwargs={"autoreset_mode": same}, **cfg)
     runs = []
     for envs in (native, sync):
         agent = LQGAgent(native, observer=observer)
@@ -435,8 +445,7 @@ def test_native_vector_env_unseeded_resets_continue_like_sync():
     """reset() without a seed (or with None entries) continues each sub-env's generator."""
     cfg = {"num_envs": 3, "x0_std": (0.1, 0.1, 0.0, 0.0)}
     native = gym.make_vec(ID, **cfg)
-    sync = gym.make_vec(ID, vectorization_mode="sync",
-                        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP}, **cfg)
+    sync = gym.make_vec(ID, vectorization_mode="sync", **cfg)
     outs = []
     for envs in (native, sync):
         envs.reset(seed=7)
@@ -460,7 +469,7 @@ def test_native_vector_env_seed_list_equals_single_env_resets():
         np.testing.assert_array_equal(info["state"][i], single_info["state"])
     with pytest.raises(ConfigError, match=r"^seed"):
         envs.reset(seed=[1, 2])
-    assert envs.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    assert envs.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP   # the default
 
 
 # ---- rendering -------------------------------------------------------------------------------------
@@ -519,3 +528,190 @@ def test_render_without_mode_warns_and_returns_none():
     env.reset(seed=0)
     with pytest.warns(UserWarning, match="render_mode"):
         assert env.render() is None
+
+
+# ---- Gymnasium's vector conventions: wrappers, reset masks, rendering, RL keywords ----------------
+def _vector_wrappers(tmp_path):
+    """Every wrapper of gymnasium.wrappers.vector, with arguments that make sense for a Box."""
+    from gymnasium.wrappers import vector as V
+
+    return {
+        "DictInfoToList": lambda e: V.DictInfoToList(e),
+        "TransformObservation": lambda e: V.TransformObservation(e, lambda o: 2.0 * o),
+        "FilterObservation": lambda e: V.FilterObservation(e, filter_keys=["p"]),
+        "FlattenObservation": lambda e: V.FlattenObservation(e),
+        "GrayscaleObservation": lambda e: V.GrayscaleObservation(e),
+        "ResizeObservation": lambda e: V.ResizeObservation(e, shape=(2,)),
+        "ReshapeObservation": lambda e: V.ReshapeObservation(e, shape=(2, 1)),
+        "RescaleObservation": lambda e: V.RescaleObservation(e, min_obs=-1.0, max_obs=1.0),
+        "DtypeObservation": lambda e: V.DtypeObservation(e, dtype=np.float32),
+        "NormalizeObservation": lambda e: V.NormalizeObservation(e),
+        "TransformAction": lambda e: V.TransformAction(e, lambda a: 0.5 * a),
+        "ClipAction": lambda e: V.ClipAction(e),
+        "RescaleAction": lambda e: V.RescaleAction(e, min_action=-1.0, max_action=1.0),
+        "TransformReward": lambda e: V.TransformReward(e, lambda r: 2.0 * r),
+        "ClipReward": lambda e: V.ClipReward(e, min_reward=0.0, max_reward=0.9),
+        "NormalizeReward": lambda e: V.NormalizeReward(e),
+        "RecordEpisodeStatistics": lambda e: V.RecordEpisodeStatistics(e),
+        "RecordVideo": lambda e: V.RecordVideo(e, video_folder=str(tmp_path / "video")),
+        "HumanRendering": lambda e: V.HumanRendering(e),
+        "VectorizeTransformObservation": lambda e: V.VectorizeTransformObservation(
+            e, wrapper=gym.wrappers.TransformObservation, func=lambda o: o + 1.0,
+            observation_space=e.single_observation_space),
+        "VectorizeTransformAction": lambda e: V.VectorizeTransformAction(
+            e, wrapper=gym.wrappers.ClipAction),
+        "VectorizeTransformReward": lambda e: V.VectorizeTransformReward(
+            e, wrapper=gym.wrappers.TransformReward, func=lambda r: r - 1.0),
+    }
+
+
+def _wrapped_run(envs, steps=60):
+    obs, info = envs.reset(seed=3)
+    out = [(obs, info)]
+    rng = np.random.default_rng(1)
+    for _ in range(steps):
+        out.append(envs.step(envs.action_space.sample() * 0 + rng.uniform(
+            -1, 1, size=envs.action_space.shape).astype(np.float32)))
+    return out
+
+
+def test_every_vector_wrapper_that_works_on_sync_works_on_the_native_env(tmp_path):
+    """Gymnasium's vector wrappers over the native env give SyncVectorEnv's results exactly."""
+    cfg = {"num_envs": 3, "duration": 0.2, "x0_std": (0.3, 0.2, 0.3, 0.3)}
+    from gymnasium.wrappers import vector as V
+
+    wrappers = _vector_wrappers(tmp_path)
+    assert set(wrappers) >= {n for n in V.__all__ if n not in ("JaxToNumpy", "JaxToTorch",
+                                                                "NumpyToTorch", "ArrayConversion")}
+    worked = []
+    for name, wrap in wrappers.items():
+        with warnings.catch_warnings():     # wrappers' own advice (e.g. float32 casts) aside
+            warnings.simplefilter("ignore")
+            try:
+                sync_run = _wrapped_run(wrap(gym.make_vec(ID, vectorization_mode="sync", **cfg)))
+            except Exception:      # not applicable to a Box observation (or needs a display)
+                continue
+            native_run = _wrapped_run(wrap(gym.make_vec(ID, **cfg)))
+        for a, b in zip(native_run, sync_run, strict=True):
+            for x, y in zip(a[:-1], b[:-1], strict=True):
+                np.testing.assert_array_equal(np.asarray(x), np.asarray(y), err_msg=name)
+        worked.append(name)
+    assert {"NormalizeObservation", "FlattenObservation", "NormalizeReward", "ClipAction",
+            "RescaleAction", "RecordEpisodeStatistics", "DictInfoToList",
+            "VectorizeTransformObservation"} <= set(worked), worked
+    print(f"\nvector wrappers that work on SyncVectorEnv and on the native env: {worked}")
+
+
+def test_reset_mask_and_disabled_autoreset_follow_sync():
+    cfg = {"num_envs": 3, "duration": 0.1, "x0_std": (0.3, 0.2, 0.3, 0.3)}
+    disabled = gym.vector.AutoresetMode.DISABLED
+    runs = []
+    for envs in (gym.make_vec(ID, autoreset_mode="disabled", **cfg),
+                 gym.make_vec(ID, vectorization_mode="sync",
+                              vector_kwargs={"autoreset_mode": disabled}, **cfg)):
+        assert envs.metadata["autoreset_mode"] == disabled
+        obs, _ = envs.reset(seed=5)
+        trace = [obs]
+        for _ in range(25):
+            obs, r, term, trunc, _ = envs.step(np.full((3, 1), 1.0, dtype=np.float32))
+            trace += [obs, r]
+            ended = term | trunc
+            if ended.any():
+                obs, info = envs.reset(options={"reset_mask": ended})
+                trace += [obs, info["_state"]]
+        runs.append(trace)
+    for a, b in zip(*runs, strict=True):
+        np.testing.assert_array_equal(a, b)
+    native = gym.make_vec(ID, autoreset_mode="disabled", **cfg)
+    native.reset(seed=0)
+    for _ in range(10):
+        native.step(np.zeros((3, 1), dtype=np.float32))
+    with pytest.raises(PendulumLQGError, match=r"step: sub-env\(s\) \[0, 1, 2\] ended"):
+        native.step(np.zeros((3, 1), dtype=np.float32))
+
+
+def test_step_before_reset_and_bad_actions_are_clear_errors():
+    with pytest.raises(PendulumLQGError, match="step: call reset"):
+        CartPoleLQGEnv().step(np.zeros(1))
+    vec = CartPoleLQGVectorEnv(4)
+    with pytest.raises(PendulumLQGError, match="step: call reset"):
+        vec.step(np.zeros((4, 1)))
+    vec.reset(seed=0)
+    with pytest.raises(PendulumLQGError, match=r"action: expected shape \(4, 1\)"):
+        vec.step(np.zeros((2, 2)))
+
+
+def test_normalized_actions_and_the_applied_force_in_info():
+    plain = gym.make(ID)
+    normalized = gym.make(ID, normalize_action=True)
+    assert normalized.action_space == gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+    plain.reset(seed=0)
+    normalized.reset(seed=0)
+    for a in (0.25, -1.0, 0.9):
+        o1, r1, *_, i1 = plain.step(np.array([10.0 * a]))
+        o2, r2, *_, i2 = normalized.step(np.array([a]))
+        np.testing.assert_array_equal(o1, o2)
+        assert r1 == r2 and i1["force"] == i2["force"] == pytest.approx(10.0 * a)
+    _, _, _, _, info = plain.step(np.array([25.0]))            # out of range: clipped
+    assert info["force"] == 10.0
+    vec = gym.make_vec(ID, num_envs=2, normalize_action=True)
+    vec.reset(seed=0)
+    _, _, _, _, info = vec.step(np.array([[0.5], [3.0]]))
+    np.testing.assert_array_equal(info["force"], [5.0, 10.0])
+    with pytest.raises(ConfigError, match="normalize_action"):
+        gym.make(ID, normalize_action="yes")
+
+
+def test_vector_env_renders_one_frame_per_sub_env():
+    code = textwrap.dedent("""
+        import numpy as np, gymnasium as gym, pendulum_lqg
+        kw = dict(render_mode="rgb_array", width=160, height=120, x0_std=(0.5, 0.2, 0, 0))
+        vec = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=2, **kw)
+        vec.reset(seed=[1, 2])
+        frames = vec.render()
+        single = gym.make(pendulum_lqg.ENV_ID, **kw)
+        single.reset(seed=2)
+        one = single.render()
+        print(len(frames), frames[0].shape, bool((frames[1] == one).all()),
+              bool((frames[0] != frames[1]).any()))
+    """)
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, env=env)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["2", "(120,", "160,", "3)", "True", "True"]
+
+
+def test_headless_machine_gets_a_working_gl_backend_automatically():
+    """No MUJOCO_GL and no display: importing pendulum_lqg first picks EGL, so check_env with its
+    render check and render() work; with MuJoCo imported first on GLFW, render says what to set."""
+    code = textwrap.dedent("""
+        import os, warnings
+        warnings.simplefilter("ignore")
+        import pendulum_lqg, gymnasium as gym
+        from gymnasium.utils.env_checker import check_env
+        env = gym.make(pendulum_lqg.ENV_ID, render_mode="rgb_array")
+        check_env(env.unwrapped)
+        env.reset(seed=0)
+        print(os.environ["MUJOCO_GL"], env.render().shape)
+    """)
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("DISPLAY", "WAYLAND_DISPLAY", "MUJOCO_GL")}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, env=env)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["egl", "(480,", "640,", "3)"]
+    forced = textwrap.dedent("""
+        import warnings
+        warnings.simplefilter("ignore")
+        import mujoco, pendulum_lqg, gymnasium as gym
+        env = gym.make(pendulum_lqg.ENV_ID, render_mode="rgb_array")
+        env.reset(seed=0)
+        try:
+            env.render()
+        except Exception as exc:
+            print(type(exc).__name__, str(exc).count(chr(10)), "MUJOCO_GL=egl" in str(exc))
+    """)
+    out = subprocess.run([sys.executable, "-c", forced], capture_output=True, text=True,
+                         timeout=120, env={**env, "MUJOCO_GL": "glfw"})
+    assert out.stdout.split() == ["PendulumLQGError", "0", "True"], out.stderr
