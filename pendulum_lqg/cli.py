@@ -511,9 +511,13 @@ def cmd_bench(args: argparse.Namespace) -> int:
             raise _cfg_error(f"--executor: the {spec.study} study runs on the local executor")
         out.prepare(spec, force=args.force, resume=args.resume)
         return _bench_study(spec, out, args)
+    # `bench NAME --record DIR` after `bench NAME`: record from the finished results (nothing to
+    # rerun, so no --resume needed)
+    resume = args.resume or (args.record is not None and not args.force
+                             and out.holds_complete(spec))
     executor = make_executor(args.executor, address=args.address, nthread=args.nthread)
     try:
-        result = run_sweep(spec, out, executor=executor, resume=args.resume, force=args.force,
+        result = run_sweep(spec, out, executor=executor, resume=resume, force=args.force,
                            progress=None if not args.quiet else False, log=log,
                            record=args.record, nthread=args.nthread)
     except SweepInterrupted as exc:

@@ -50,8 +50,11 @@ def _plt() -> Any:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    plt.rcParams.update({"figure.dpi": 110, "savefig.dpi": 80, "font.size": 9, "axes.grid": True,
-                         "grid.alpha": 0.3, "legend.fontsize": 8})
+    # readable at README width: ~1000–1600 px wide PNGs, 11 pt text
+    plt.rcParams.update({"figure.dpi": 110, "savefig.dpi": 110, "font.size": 11,
+                         "axes.titlesize": 11, "axes.labelsize": 11, "xtick.labelsize": 10,
+                         "ytick.labelsize": 10, "axes.grid": True, "grid.alpha": 0.3,
+                         "legend.fontsize": 9, "lines.linewidth": 1.6})
     return plt
 
 
@@ -110,7 +113,7 @@ def make_report(paths: list[Path], out: Path) -> Path:
 
 def _save(fig: Any, out: Path, fname: str, plt: Any) -> str:
     fig.tight_layout()
-    fig.savefig(out / fname)
+    fig.savefig(out / fname, bbox_inches="tight")
     plt.close(fig)
     return fname
 
@@ -165,6 +168,25 @@ def _metric_curve(rows: list[dict[str, object]], x: str, metric: str, *, success
     return xs, np.array(mean), np.array(se)
 
 
+def _log_x(ax: Any, xs: list[float] | np.ndarray) -> None:
+    """A log x axis that keeps a value of 0 visible (symlog, linear below the smallest positive
+    value), so noise-free points sit at the left edge instead of vanishing."""
+    xs = np.asarray(xs, dtype=float)
+    positive = xs[xs > 0]
+    if positive.size and np.all(xs > 0):
+        ax.set_xscale("log")
+    else:
+        ax.set_xscale("symlog", linthresh=float(positive.min()) if positive.size else 1e-3,
+                      linscale=0.5)
+
+
+def _legend_outside(fig: Any, ax: Any) -> None:
+    """The legend to the right of the axes, so the curves stay readable."""
+    handles, labels = ax.get_legend_handles_labels()
+    if handles:
+        fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5), frameon=False)
+
+
 def _grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: Any,
                   ) -> list[tuple[str, str]]:
     rows = _read_rows(folder)
@@ -181,65 +203,74 @@ def _grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: 
     x = max(sweeps, key=lambda k: len(grid[k]))
     facets = [k for k in sweeps if k != x]
     facet_vals = sorted({tuple(r[k] for k in facets) for r in rows})
-    fig, axes = plt.subplots(1, len(facet_vals), figsize=(5.2 * len(facet_vals), 3.8),
-                             squeeze=False, sharey=True)
-    for ax, fv in zip(axes[0], facet_vals, strict=True):
+    ncol = min(len(facet_vals), 2)
+    nrow = -(-len(facet_vals) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.2 * nrow), squeeze=False,
+                             sharey=True)
+    markers = ["o", "s", "^", "D", "v", "P", "X", "*"]
+    for ax, fv in zip(axes.flat, facet_vals, strict=False):
         sub = [r for r in rows if tuple(r[k] for k in facets) == fv]
-        for key, grp in sorted(_group(sub, series).items()):
+        for i, (key, grp) in enumerate(sorted(_group(sub, series).items())):
             xs, rate, lo, hi = _success_curve(grp, x)
-            line, = ax.plot(xs, rate, marker="o", ms=3, label=" ".join(map(str, key)))
+            line, = ax.plot(xs, rate, marker=markers[i % len(markers)], ms=5,
+                            ls=["-", "--", "-.", ":"][i // len(markers) % 4] if i >= 4 else "-",
+                            label=" ".join(map(str, key)))
             ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.08, lw=0)
         ax.set_xlabel(LABELS.get(x, x))
         ax.set_ylim(-0.03, 1.03)
-        if len(_group(sub, series)) > 4:
-            for ln, ls in zip(ax.get_lines(), ["-", "--", "-.", ":"] * 4, strict=False):
-                ln.set_linestyle(ls)
         if x in LOG_KEYS:
-            ax.set_xscale("log")
+            _log_x(ax, [float(r[x]) for r in sub])  # type: ignore[arg-type]
         if facets:
             ax.set_title(", ".join(f"{k} = {v}" for k, v in zip(facets, fv, strict=True)))
-    axes[0][0].set_ylabel("success rate (95 % Wilson band)")
-    axes[0][-1].legend(loc="best")
+    for ax in list(axes.flat)[len(facet_vals):]:
+        ax.set_visible(False)
+    for row in axes:
+        row[0].set_ylabel("success rate\n(95 % Wilson band)")
+    _legend_outside(fig, axes.flat[0])
     fig.suptitle(f"{name}: success rate vs {x}")
     figs.append((f"success rate vs {x}", _save(fig, out, f"{name}_success_vs_{x}.png", plt)))
 
     if x == "control_period":
-        fig, axes = plt.subplots(1, len(facet_vals), figsize=(5.2 * len(facet_vals), 3.8),
-                                 squeeze=False)
-        for ax, fv in zip(axes[0], facet_vals, strict=True):
+        fig, axes = plt.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.2 * nrow), squeeze=False)
+        for ax, fv in zip(axes.flat, facet_vals, strict=False):
             sub = [r for r in rows if tuple(r[k] for k in facets) == fv]
-            for key, grp in sorted(_group(sub, series).items()):
+            for i, (key, grp) in enumerate(sorted(_group(sub, series).items())):
                 xs, m, _ = _metric_curve(grp, x, "cost", successes_only=True)
-                ax.plot(xs, m, marker="o", ms=3, label=" ".join(map(str, key)))
+                ax.plot(xs, m, marker=markers[i % len(markers)], ms=5,
+                        label=" ".join(map(str, key)))
             ax.set_yscale("log")
             ax.set_xlabel(LABELS[x])
             ax.set_title(", ".join(f"{k} = {v}" for k, v in zip(facets, fv, strict=True)))
-        axes[0][0].set_ylabel("mean cost J of successful episodes")
-        axes[0][-1].legend(loc="best")
+        for ax in list(axes.flat)[len(facet_vals):]:
+            ax.set_visible(False)
+        for row in axes:
+            row[0].set_ylabel("mean cost J\n(successful episodes)")
+        _legend_outside(fig, axes.flat[0])
         fig.suptitle(f"{name}: cost vs control period")
         figs.append(("cost vs control period", _save(fig, out, f"{name}_cost_vs_T.png", plt)))
 
     has_est = any(np.isfinite(float(r["rms_est_err_theta"])) and float(r["rms_est_err_theta"]) > 0
                   for r in rows)  # type: ignore[arg-type]
     if has_est and x == "noise_scale":
-        fig, axes = plt.subplots(1, 4, figsize=(15, 3.6))
-        for ax, (metric, label) in zip(axes, EST_STATES, strict=True):
+        fig, axes = plt.subplots(2, 2, figsize=(12, 8))
+        for ax, (metric, label) in zip(axes.flat, EST_STATES, strict=True):
             for key, grp in sorted(_group(rows, series).items()):
                 xs, m, se = _metric_curve(grp, x, metric, successes_only=False)
                 if not np.any(m > 0):
                     continue          # true-state policies have no estimation error
-                ax.errorbar(xs, m, yerr=se, marker="o", ms=3, capsize=2,
+                ax.errorbar(xs, m, yerr=se, marker="o", ms=4, capsize=2,
                             label=" ".join(map(str, key)))
-            ax.set_xscale("log")
+            _log_x(ax, [float(r[x]) for r in rows])  # type: ignore[arg-type]
             ax.set_yscale("log")
             ax.set_xlabel(LABELS[x])
             ax.set_title(f"RMS estimation error, {label}")
-        axes[-1].legend(loc="best")
+        _legend_outside(fig, axes.flat[0])
         fig.suptitle(f"{name}: estimation error per state (all episodes, mean ± SE)")
         figs.append(("estimation error per state",
                      _save(fig, out, f"{name}_estimation_error.png", plt)))
     nominal = 1.0 if x == "noise_scale" else None
-    figs.append(("cost distributions", _cost_boxes(rows, out, name, series, (x, nominal), plt)))
+    figs.append(("cost distributions", _cost_boxes(rows, out, name, series + facets,
+                                                   (x, nominal), plt)))
     return figs
 
 
@@ -256,21 +287,23 @@ def _cost_boxes(rows: list[dict[str, object]], out: Path, name: str, series: lis
             xs = [xv]
     else:
         xk, xs = "", [None]
-    fig, axes = plt.subplots(1, len(xs), figsize=(max(5.0, 1.1 * len(groups)) * len(xs) ** 0.7,
-                                                  3.8), squeeze=False, sharey=True)
-    for ax, xv in zip(axes[0], xs, strict=True):
+    fig, axes = plt.subplots(len(xs), 1, figsize=(max(7.0, 0.75 * len(groups)), 4.0 * len(xs)),
+                             squeeze=False, sharey=True)
+    names = [k for k in series if k != "config"]
+    for ax, xv in zip(axes[:, 0], xs, strict=True):
         data, labels = [], []
         for key, grp in sorted(groups.items()):
             c = [float(r["cost"]) for r in grp  # type: ignore[arg-type]
                  if bool(r["success"]) and (xv is None or float(r[xk]) == xv)]  # type: ignore[arg-type]
             data.append(c if c else [np.nan])
-            labels.append("\n".join(map(str, key)))
+            labels.append("\n".join(f"{n}={v}" if n not in ("policy", "discretization") else str(v)
+                                    for n, v in zip(names or series, key, strict=False)))
         ax.boxplot(data, showfliers=True, flierprops={"ms": 2})
-        ax.set_xticks(range(1, len(labels) + 1), labels, rotation=30, ha="right", fontsize=7)
+        ax.set_xticks(range(1, len(labels) + 1), labels, rotation=35, ha="right", fontsize=9)
         ax.set_yscale("log")
+        ax.set_ylabel("cost J\n(successful episodes)")
         if xv is not None:
-            ax.set_title(f"{xk} = {xv:g}")
-    axes[0][0].set_ylabel("cost J (successful episodes)")
+            ax.set_title(f"{LABELS.get(xk, xk)} = {xv:g}")
     fig.suptitle(f"{name}: cost distributions")
     return _save(fig, out, f"{name}_cost_distribution.png", plt)
 

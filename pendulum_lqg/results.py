@@ -132,6 +132,18 @@ class ResultsDir:
             self.lock.unlink(missing_ok=True)
             self._locked = False
 
+    def holds_complete(self, spec: ExperimentSpec) -> bool:
+        """The folder holds this very experiment's finished results (same fingerprint, every work
+        unit and the summary written)."""
+        spec_file = self.path / "spec.json"
+        if not (spec_file.is_file() and (self.path / "summary.json").is_file()):
+            return False
+        try:
+            fingerprint = json.loads(spec_file.read_text()).get("fingerprint")
+        except (OSError, ValueError):
+            return False
+        return fingerprint == spec.fingerprint() and {u.key for u in spec.units()} <= self.done()
+
     def done(self) -> set[str]:
         if not self.units_dir.exists():
             return set()

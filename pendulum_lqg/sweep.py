@@ -195,6 +195,22 @@ def _with_progress(outcomes: Iterable[Outcome], todo: list[WorkUnit], total: int
             yield unit, rows, error
 
 
+def recording_name(experiment: str, index: int, values: dict[str, object]) -> str:
+    """``lecture_c003_dlqr+kalman_noise_scale1.0.rrd``: the experiment, the configuration index and
+    its grid values (a plugin policy by its file or module name), in characters safe for any
+    file system."""
+    import re
+
+    parts = [experiment, f"c{index:03d}"]
+    for key, value in values.items():
+        text = str(value)
+        if key == "policy" and ":" in text:           # a plugin: file stem or module, and attr
+            module, _, attr = text.rpartition(":")
+            text = f"{Path(module).stem}.{attr}"
+        parts.append(text if key == "policy" else f"{key}{text}")
+    return re.sub(r"[^A-Za-z0-9.+=-]+", "_", "_".join(parts))[:180] + ".rrd"
+
+
 def record_telling_episodes(spec: ExperimentSpec, out: ResultsDir, record_dir: Path, *,
                             nthread: int | None = None, log: Log = None) -> list[Path]:
     """Rerun recordings of the worst / median / best / first failing episode of each
@@ -218,7 +234,7 @@ def record_telling_episodes(spec: ExperimentSpec, out: ResultsDir, record_dir: P
         res = run_episodes(simulated, scenario, policy, seed=spec.seed,
                            episodes=sorted(set(picks.values())), nthread=nthread,
                            trajectory=True)
-        path = record_dir / f"{spec.name}_config{cfg.index:03d}.rrd"
+        path = record_dir / recording_name(spec.name, cfg.index, cfg.values)
         config: dict[str, Any] = {"experiment": spec.name, "configuration": cfg.values,
                                   "seed": spec.seed, "telling_episodes": picks,
                                   "scenario": scenario.to_dict(),

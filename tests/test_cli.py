@@ -299,3 +299,24 @@ def test_run_summary_reports_settling_time_only_noise_free(capsys):
     assert main(["run", "--episodes", "2", "--duration", "2"]) == 0
     noisy = capsys.readouterr().out
     assert "settling time [s]" not in noisy and "not reported under noise" in noisy
+
+
+def test_bench_record_after_bench_records_from_the_finished_results(tmp_path, capsys):
+    """The README's order — `bench NAME`, then `bench NAME --record DIR` — works as written."""
+    assert _bench(tmp_path) == 0
+    out = tmp_path / "out"
+    before = (out / "episodes.csv").read_bytes(), (out / "summary.json").read_bytes()
+    rec = tmp_path / "recordings"
+    rec.mkdir()                                   # an existing folder is fine too
+    assert _bench(tmp_path, "--record", str(rec)) == 0
+    assert ((out / "episodes.csv").read_bytes(), (out / "summary.json").read_bytes()) == before
+    names = sorted(p.name for p in rec.glob("*.rrd"))
+    assert names == ["small_c000_dlqr+kalman_noise_scale0.0.rrd",
+                     "small_c001_dlqr+kalman_noise_scale1.0.rrd",
+                     "small_c002_dlqr+luenberger_noise_scale0.0.rrd",
+                     "small_c003_dlqr+luenberger_noise_scale1.0.rrd"]
+    capsys.readouterr()
+    # another experiment's results in the folder are still refused without --force
+    assert main(["bench", str(tmp_path / "small.toml"), "--out", str(out), "--quiet", "--seed",
+                 "4", "--record", str(rec)]) == 2
+    assert "already holds results" in capsys.readouterr().err
