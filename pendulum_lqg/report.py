@@ -287,21 +287,26 @@ def _cost_boxes(rows: list[dict[str, object]], out: Path, name: str, series: lis
             xs = [xv]
     else:
         xk, xs = "", [None]
-    fig, axes = plt.subplots(len(xs), 1, figsize=(max(7.0, 0.75 * len(groups)), 4.0 * len(xs)),
+    fig, axes = plt.subplots(1, len(xs), figsize=(2.0 + 4.2 * len(xs), 1.2 + 0.36 * len(groups)),
                              squeeze=False, sharey=True)
+    from matplotlib import ticker
+
     names = [k for k in series if k != "config"]
-    for ax, xv in zip(axes[:, 0], xs, strict=True):
+    for ax, xv in zip(axes[0], xs, strict=True):     # horizontal boxes: one readable line each
         data, labels = [], []
-        for key, grp in sorted(groups.items()):
+        for key, grp in sorted(groups.items(), reverse=True):
             c = [float(r["cost"]) for r in grp  # type: ignore[arg-type]
                  if bool(r["success"]) and (xv is None or float(r[xk]) == xv)]  # type: ignore[arg-type]
             data.append(c if c else [np.nan])
-            labels.append("\n".join(f"{n}={v}" if n not in ("policy", "discretization") else str(v)
-                                    for n, v in zip(names or series, key, strict=False)))
-        ax.boxplot(data, showfliers=True, flierprops={"ms": 2})
-        ax.set_xticks(range(1, len(labels) + 1), labels, rotation=35, ha="right", fontsize=9)
-        ax.set_yscale("log")
-        ax.set_ylabel("cost J\n(successful episodes)")
+            labels.append(" ".join(f"{n} {v}" if n not in ("policy", "discretization") else str(v)
+                                   for n, v in zip(names or series, key, strict=False)))
+        ax.boxplot(data, orientation="horizontal", showfliers=True, flierprops={"ms": 2})
+        ax.set_yticks(range(1, len(labels) + 1), labels)
+        ax.set_xscale("log")
+        ax.xaxis.set_major_locator(ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(ticker.NullFormatter())
+        ax.set_xlabel("cost J (successful episodes)")
         if xv is not None:
             ax.set_title(f"{LABELS.get(xk, xk)} = {xv:g}")
     fig.suptitle(f"{name}: cost distributions")
@@ -336,22 +341,27 @@ def _mismatch_figures(rows: list[dict[str, object]], out: Path, name: str, serie
     groups = sorted(_group(rows, series).items())
     ms = sorted({float(r["pole_mass_scale"]) for r in rows})  # type: ignore[arg-type]
     ls = sorted({float(r["pole_length_scale"]) for r in rows})  # type: ignore[arg-type]
-    fig, axes = plt.subplots(1, len(groups), figsize=(3.3 * len(groups), 3.4), squeeze=False)
-    for ax, (key, grp) in zip(axes[0], groups, strict=True):
+    ncol = min(len(groups), 2)
+    nrow = -(-len(groups) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.4 * nrow), squeeze=False)
+    for ax, (key, grp) in zip(axes.flat, groups, strict=False):
         Z = np.full((len(ls), len(ms)), np.nan)
         for (m, ln), cell in _group(grp, ["pole_mass_scale", "pole_length_scale"]).items():
             Z[ls.index(float(ln)), ms.index(float(m))] = np.mean([bool(r["success"]) for r in cell])
         im = ax.imshow(Z, origin="lower", vmin=0, vmax=1, cmap="RdYlGn", aspect="auto")
         ax.set_xticks(range(len(ms)), [f"{v:g}" for v in ms])
         ax.set_yticks(range(len(ls)), [f"{v:g}" for v in ls])
-        ax.set_xlabel("pole mass ×")
-        ax.set_title(" ".join(map(str, key)), fontsize=8)
+        ax.set_xlabel("pole mass × nominal")
+        ax.set_ylabel("pole length × nominal")
+        ax.set_title(" ".join(map(str, key)))
         ax.grid(False)
         for i in range(len(ls)):
             for j in range(len(ms)):
-                ax.text(j, i, f"{Z[i, j]:.0%}", ha="center", va="center", fontsize=6)
-    axes[0][0].set_ylabel("pole length ×")
-    fig.colorbar(im, ax=axes[0].tolist(), shrink=0.8, label="success rate")
+                ax.text(j, i, f"{Z[i, j]:.0%}", ha="center", va="center", fontsize=9)
+    for ax in list(axes.flat)[len(groups):]:
+        ax.set_visible(False)
+    fig.subplots_adjust(top=0.9, wspace=0.45, hspace=0.4)
+    fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label="success rate")
     fig.suptitle(f"{name}: success over pole mass × length")
     fig.savefig(out / f"{name}_success_grid.png", bbox_inches="tight")
     plt.close(fig)
