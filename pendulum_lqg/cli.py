@@ -87,8 +87,7 @@ def _number(text: str) -> float:
     return v
 
 
-CONTROLLERS = ("lqr", "dlqr")
-OBSERVERS = ("none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy")
+from pendulum_lqg.names import CONTROLLERS, OBSERVERS  # noqa: E402 (no numpy)
 
 
 def _add_design_options(p: argparse.ArgumentParser) -> None:

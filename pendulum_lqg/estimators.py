@@ -223,3 +223,60 @@ class TimeVaryingKalman(Estimator):
     def select(self, rows: np.ndarray) -> None:
         super().select(rows)
         self._age = self._age[rows]
+
+
+class ReducedOrderEstimator(Estimator):
+    r"""Reduced-order (minimal-order) observer: only the unmeasured part is estimated.
+
+    With the design of :func:`~pendulum_lqg.design.dreduced_order_observer` (``[y; w] = T x``):
+
+    .. math:: \hat x_n = T^{-1}\begin{bmatrix} y_n \\ z_n + G y_n\end{bmatrix},\qquad
+              z_{n+1} = F z_n + H_y y_n + H_u u_n
+
+    The measured part of ``x̂`` is the newest measurement itself (noise included); ``x_prior`` is
+    the estimate reconstructed from the predicted ``z`` and ``innovation`` is 0 (there is no
+    output correction term to log).
+    """
+
+    form = "current"
+
+    def __init__(self, obs: object, C: np.ndarray) -> None:
+        T = obs.T                                            # type: ignore[attr-defined]
+        super().__init__(T.shape[0])
+        self.obs, self.C, self.gain = obs, C, obs.G          # type: ignore[attr-defined]
+        self.F, self.H_y, self.H_u = obs.F, obs.H_y, obs.H_u  # type: ignore[attr-defined]
+        self.T, self.T_inv = T, obs.T_inv                    # type: ignore[attr-defined]
+        self.P = None
+        p = C.shape[0]
+        self._p = p
+        self._z = np.zeros((0, T.shape[0] - p))
+        self._y = np.zeros((0, p))
+
+    def reset(self, x_hat0: np.ndarray, rows: np.ndarray | None = None) -> None:
+        super().reset(x_hat0, rows)
+        tx = mv(self.T, np.asarray(x_hat0, dtype=float))     # [ŷ₀; ŵ₀]
+        z0 = tx[:, self._p:] - mv(self.gain, tx[:, :self._p])
+        if rows is None:
+            self._z = z0
+            self._y = tx[:, :self._p].copy()
+        else:
+            self._z[rows] = z0
+            self._y[rows] = tx[:, :self._p]
+
+    def _reconstruct(self, y: np.ndarray) -> np.ndarray:
+        w = self._z + mv(self.gain, y)
+        return mv(self.T_inv, np.hstack([y, w]))
+
+    def estimate(self, y: np.ndarray) -> np.ndarray:
+        self.x_prior = self._reconstruct(self._y)
+        self._y = y
+        self.x_hat = self._reconstruct(y)
+        self.innovation = np.zeros_like(y)
+        return self.x_hat
+
+    def update(self, u: np.ndarray) -> None:
+        self._z = mv(self.F, self._z) + mv(self.H_y, self._y) + mv(self.H_u, u)
+
+    def select(self, rows: np.ndarray) -> None:
+        super().select(rows)
+        self._z, self._y = self._z[rows], self._y[rows]

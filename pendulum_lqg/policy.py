@@ -13,7 +13,13 @@ Observers
     ``none`` true state · ``luenberger`` current form, continuous poles mapped by z = e^{sT} ·
     ``kalman`` steady-state filter (current) form · ``kalman-predictor`` steady-state predictor form ·
     ``kalman-tv`` time-varying filter from ``M0`` · ``kalman-bucy`` continuous Kalman–Bucy design,
-    its observer ODE discretised by ZOH (a predictor-type recursion).
+    its observer ODE discretised by ZOH (a predictor-type recursion) · ``reduced-order`` discrete
+    minimal-order observer of the velocities (poles ``reduced_order_poles`` mapped by z = e^{sT}) ·
+    ``ackermann`` discrete predictor from the cart position p alone (Ackermann's formula on
+    ``(Φ, C₁)``, poles ``ackermann_poles`` mapped by z = e^{sT}) · ``lmi`` continuous decay-rate
+    observer (Re λ ≤ −``lmi_decay``) · ``h2`` continuous H₂ filter by LMI (= Kalman–Bucy) ·
+    ``hinf`` continuous H∞ filter by LMI (minimal certified γ). The continuous designs run under
+    sample-and-hold like ``kalman-bucy``: the observer ODE with y and u held, discretised exactly.
 """
 
 from __future__ import annotations
@@ -32,19 +38,19 @@ from pendulum_lqg.estimators import (
     CurrentEstimator,
     Estimator,
     PredictorEstimator,
+    ReducedOrderEstimator,
     TimeVaryingKalman,
     TrueState,
     mv,
 )
 from pendulum_lqg.linearize import ContinuousModel, discretize_zoh, linearize, steps_per_period
+from pendulum_lqg.names import CONTROLLERS, OBSERVERS
 from pendulum_lqg.noise import NoiseModel
 from pendulum_lqg.plant import Plant
 
-CONTROLLERS: tuple[str, ...] = ("lqr", "dlqr")
-OBSERVERS: tuple[str, ...] = ("none", "luenberger", "kalman", "kalman-predictor", "kalman-tv",
-                              "kalman-bucy")
 Controller = Literal["lqr", "dlqr"]
-Observer = Literal["none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy"]
+Observer = Literal["none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy",
+                   "reduced-order", "ackermann", "lmi", "h2", "hinf"]
 
 
 @dataclass(frozen=True)
@@ -58,6 +64,11 @@ class DesignSpec:
     observer_poles : continuous-time Luenberger poles (s-plane), mapped by z = e^{sT}
     M0 : diagonal of the initial a-priori covariance of the time-varying Kalman filter
     discretization : model the discrete designs use, "zoh" (exact) or "euler" (first order)
+    reduced_order_poles : continuous-time poles (2) of the reduced-order observer [rad/s]
+    ackermann_poles : continuous-time poles (4) of the Ackermann observer from p alone [rad/s];
+        faster than ``observer_poles``: estimating θ from the cart position alone with the slow
+        default set is too slow for the falling pole (3.97 rad/s) even without noise
+    lmi_decay : decay rate α [1/s] of the ``lmi`` observer (every error pole at Re λ ≤ −α)
     """
 
     controller: str = "dlqr"
@@ -67,6 +78,9 @@ class DesignSpec:
     observer_poles: tuple[float, ...] = design.DEFAULT_OBSERVER_POLES
     M0: tuple[float, ...] = (0.01, 0.01, 0.01, 0.01)
     discretization: str = "zoh"
+    reduced_order_poles: tuple[float, ...] = (-4.0, -5.0)
+    ackermann_poles: tuple[float, ...] = (-2.0, -3.0, -4.0, -5.0)
+    lmi_decay: float = 1.0
 
     def __post_init__(self) -> None:
         if self.controller not in CONTROLLERS:
@@ -84,9 +98,16 @@ class DesignSpec:
         if not np.isfinite(r) or r <= 0:
             raise ConfigError(f"R: expected a finite positive number, got {self.R!r}")
         object.__setattr__(self, "R", r)
-        checked = as_poles("observer_poles", self.observer_poles, 4)
-        poles = tuple(complex(p) if abs(p.imag) > 0 else float(p.real) for p in checked)
-        object.__setattr__(self, "observer_poles", poles)
+        for name, count in (("observer_poles", 4), ("reduced_order_poles", 2),
+                            ("ackermann_poles", 4)):
+            checked = as_poles(name, getattr(self, name), count)
+            poles = tuple(complex(p) if abs(p.imag) > 0 else float(p.real) for p in checked)
+            object.__setattr__(self, name, poles)
+        decay = self.lmi_decay
+        if isinstance(decay, bool) or not isinstance(decay, int | float) \
+                or not np.isfinite(decay) or decay < 0:
+            raise ConfigError(f"lmi_decay: expected a finite rate ≥ 0 [1/s], got {decay!r}")
+        object.__setattr__(self, "lmi_decay", float(decay))
 
     @property
     def Q_matrix(self) -> np.ndarray:
@@ -236,13 +257,36 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
         est = TimeVaryingKalman(Phi, Gamma, C, Qd_noise, V, M0)
         kf = design.dkalman(Phi, np.eye(4), C, Qd_noise, V)
         info["L"], info["observer_poles"], info["M0"] = kf.L, kf.poles, M0
-    else:  # kalman-bucy
+    elif spec.observer == "ackermann":
+        # discrete predictor from the cart position alone: Ackermann on (Φ, C₁) with the poles
+        # z = e^{sT}; the θ column of the gain is 0, so the loop sees y = [p, θ] but uses p only
+        z_poles = np.exp(np.asarray(spec.ackermann_poles, dtype=complex) * dt)
+        L_p = np.hstack([design.ackermann(Phi, C[:1], z_poles).L, np.zeros((4, 1))])
+        est = PredictorEstimator(Phi - L_p @ C, Gamma, L_p, C)
+        info["L"], info["observer_poles"] = L_p, np.linalg.eigvals(Phi - L_p @ C)
+    elif spec.observer == "reduced-order":
+        ro = design.dreduced_order_observer(
+            Phi, Gamma, C, np.exp(np.asarray(spec.reduced_order_poles, dtype=complex) * dt))
+        est = ReducedOrderEstimator(ro, C)
+        info["L"], info["observer_poles"] = ro.G, ro.poles
+    else:  # continuous designs, emulated under sample-and-hold
         G, W = noise_design_matrices(lin, noise, dt)
-        kb = design.kalman(A, G, C, W, noise.V_density(dt))
-        F, G_u, G_y = _emulated_observer(A, B, C, kb.L, dt)
-        est = PredictorEstimator(F, G_u, G_y, C, gain=kb.L, P=kb.P)
-        info["L"], info["observer_poles"] = kb.L, np.linalg.eigvals(F)
-        info["observer_poles_continuous"] = kb.poles
+        P_obs = None
+        if spec.observer == "kalman-bucy":
+            kb = design.kalman(A, G, C, W, noise.V_density(dt))
+            L, P_obs = kb.L, kb.P
+        elif spec.observer == "lmi":
+            L = design.lmi_observer(A, C, decay=spec.lmi_decay).L
+        elif spec.observer == "h2":
+            L = design.h2_filter(A, G, C, W, noise.V_density(dt)).L
+        else:  # hinf
+            res = design.hinf_filter(A, G, C, W, noise.V_density(dt))
+            L = res.L
+            info["hinf_gamma"] = res.bound
+        F, G_u, G_y = _emulated_observer(A, B, C, L, dt)
+        est = PredictorEstimator(F, G_u, G_y, C, gain=L, P=P_obs)
+        info["L"], info["observer_poles"] = L, np.linalg.eigvals(F)
+        info["observer_poles_continuous"] = np.linalg.eigvals(A - L @ C)
     info["noise_Qd"], info["noise_V"] = Qd_noise, V
     return Policy(K=ctrl.K, estimator=est, u_max=plant.u_max,
                   name=f"{spec.controller}+{spec.observer}", info=info)

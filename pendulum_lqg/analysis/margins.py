@@ -128,6 +128,27 @@ def current_compensator(Phi: ArrayLike, Gamma: ArrayLike, C: ArrayLike, K: Array
     return control.ss(Acl @ I_LC, Acl @ L, K @ I_LC, K @ L, dt=dt)
 
 
+def reduced_order_compensator(F: ArrayLike, H_y: ArrayLike, H_u: ArrayLike, G: ArrayLike,
+                              T_inv: ArrayLike, K: ArrayLike, *, dt: float) -> control.StateSpace:
+    r"""Discrete compensator of the reduced-order observer, from ``y`` to ``−u``.
+
+    With :math:`\hat x = T^{-1}[y;\ z + Gy]` and :math:`KT^{-1} = [K_a\ K_b]`,
+    :math:`-u = K_b z + (K_a + K_bG)\,y`, and :math:`z^+ = Fz + H_y y + H_u u`:
+
+    .. math::
+        z[n+1] = (F - H_uK_b)z[n] + (H_y - H_u D)y[n],\qquad -u[n] = K_b z[n] + D y[n],
+        \quad D = K_a + K_bG.
+    """
+    F = as_matrix("F", F)
+    K = as_matrix("K", K)
+    KT = K @ as_matrix("T_inv", T_inv)
+    p = as_matrix("G", G).shape[1]
+    Ka, Kb = KT[:, :p], KT[:, p:]
+    D = Ka + Kb @ np.asarray(G)
+    H_u = np.asarray(H_u)
+    return control.ss(F - H_u @ Kb, np.asarray(H_y) - H_u @ D, Kb, D, dt=dt)
+
+
 def loop_through(compensator: control.StateSpace, P: control.StateSpace) -> control.StateSpace:
     """Loop gain at the plant input, ``L = C_K · P`` (input → plant → compensator → −input)."""
     return control.series(P, compensator)

@@ -157,6 +157,7 @@ def policy_loop(policy: Any, Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, 
     from pendulum_lqg.estimators import (
         CurrentEstimator,
         PredictorEstimator,
+        ReducedOrderEstimator,
         TimeVaryingKalman,
         TrueState,
     )
@@ -171,6 +172,8 @@ def policy_loop(policy: Any, Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, 
         comp = M.current_compensator(est.Phi, est.Gamma, est.C, K, policy.info["L"], dt=dt)
     elif isinstance(est, PredictorEstimator):
         comp = M.predictor_compensator(est.F, est.G_u, est.G_y, K, dt=dt)
+    elif isinstance(est, ReducedOrderEstimator):
+        comp = M.reduced_order_compensator(est.F, est.H_y, est.H_u, est.gain, est.T_inv, K, dt=dt)
     else:  # pragma: no cover - every estimator of policy.py is handled above
         raise ConfigError(f"policy: no loop model for estimator {type(est).__name__}")
     return M.loop_through(comp, P)

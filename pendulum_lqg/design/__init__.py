@@ -8,6 +8,8 @@ module                 contents
 ``kalman``             :func:`kalman` (Kalman–Bucy), :func:`dkalman` (filter + predictor gains),
                        :func:`kalman_tv` (time-varying recursion)
 ``luenberger``         :func:`luenberger`, :func:`dluenberger`
+``observers``          :func:`ackermann`, :func:`reduced_order_observer` (and ``d…``),
+                       :func:`lmi_observer`, :func:`h2_filter`, :func:`hinf_filter` (LMIs)
 ``lqg``                :func:`lqg` closed-loop assembly and the separation check
 ``structure``          controllability / observability ranks and PBH tests
 ``discretize``         :func:`zoh`, :func:`euler`, :func:`process_noise_covariance`,
@@ -45,6 +47,16 @@ from pendulum_lqg.design.luenberger import (
     dluenberger,
     luenberger,
 )
+from pendulum_lqg.design.observers import (
+    LMIObserverResult,
+    ReducedOrderObserver,
+    ackermann,
+    dreduced_order_observer,
+    h2_filter,
+    hinf_filter,
+    lmi_observer,
+    reduced_order_observer,
+)
 from pendulum_lqg.design.structure import (
     StructureReport,
     controllability_matrix,
@@ -57,26 +69,34 @@ __all__ = [
     "DKalmanResult",
     "FiniteHorizonLQR",
     "KalmanResult",
+    "LMIObserverResult",
     "LQGResult",
     "LQRResult",
     "ObserverResult",
+    "ReducedOrderObserver",
     "StructureReport",
     "TimeVaryingKalmanGains",
+    "ackermann",
     "bryson",
     "c2d_poles",
     "controllability_matrix",
     "dkalman",
     "dlqr",
     "dluenberger",
+    "dreduced_order_observer",
     "euler",
     "finite_horizon_dlqr",
+    "h2_filter",
+    "hinf_filter",
     "kalman",
     "kalman_tv",
+    "lmi_observer",
     "lqg",
     "lqr",
     "luenberger",
     "observability_matrix",
     "process_noise_covariance",
+    "reduced_order_observer",
     "sampled_cost",
     "structure",
     "zoh",

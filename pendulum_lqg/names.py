@@ -1,0 +1,11 @@
+"""The names of the built-in choices, in one light module (the CLI imports it without numpy)."""
+
+from __future__ import annotations
+
+CONTROLLERS: tuple[str, ...] = ("lqr", "dlqr")
+#: Observers: ``none`` (true state) and the estimators of :mod:`pendulum_lqg.policy`.
+OBSERVERS: tuple[str, ...] = ("none", "luenberger", "kalman", "kalman-predictor", "kalman-tv",
+                              "kalman-bucy", "reduced-order", "ackermann", "lmi", "h2", "hinf")
+#: How the plant is simulated: MuJoCo, or the linearisation discretised exactly (ZOH) or by
+#: forward Euler at the control period (the lecture's own linear simulation).
+PLANTS: tuple[str, ...] = ("mujoco", "linear-zoh", "linear-euler")
