@@ -156,6 +156,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="initial pole angle in rad, e.g. --theta0 -0.1 (default 0.1)")
     p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
                    help="initial estimate: x̂₀ = 0 or the true x₀ (default zero)")
+    p.add_argument("--plant", choices=PLANTS, default="mujoco",
+                   help="the simulated plant: MuJoCo, or the model's linearisation discretised "
+                        "exactly (linear-zoh) or by the lecture's forward Euler at the control "
+                        "period (linear-euler) (default mujoco)")
     p.add_argument("--backend", choices=("rollout", "step"), default="rollout",
                    help="batched mujoco.rollout or a plain mj_step loop; bit-identical results "
                         "(default rollout)")
@@ -410,7 +414,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     plant = load_plant(args.model)
     noise = _noise_from_args(args, scale=args.noise_scale)
     scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,
-                        x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0)
+                        x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0,
+                        plant=args.plant)
     plugin = is_plugin_ref(name)
     spec = _spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
     policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)

@@ -81,7 +81,7 @@ class EnvConfig:
               measurement_variance: float | Sequence[float], x0: Sequence[float],
               x0_std: Sequence[float], theta_max: float, cost_Q: Sequence[float], cost_R: float,
               reward_scale: float, model_overrides: Mapping[str, float] | ModelOverrides | None,
-              model_path: str | None) -> EnvConfig:
+              model_path: str | None, plant: str = "mujoco") -> EnvConfig:
         if observation_mode not in OBSERVATION_MODES:
             raise ConfigError(f"observation_mode: expected 'measurement' or 'state', got "
                               f"{observation_mode!r}")
@@ -111,7 +111,8 @@ class EnvConfig:
             raise ConfigError(f"model_path: expected a path string, got {model_path!r}")
         scenario = Scenario(control_period=control_period, duration=duration, noise=noise,
                             x0=x0, x0_std=x0_std, theta_max=theta_max,  # type: ignore[arg-type]
-                            cost_Q=cost_Q, cost_R=cost_R, overrides=overrides)  # type: ignore[arg-type]
+                            cost_Q=cost_Q, cost_R=cost_R, overrides=overrides,  # type: ignore[arg-type]
+                            plant=plant)
         return cls(scenario=scenario, observation_mode=observation_mode,  # type: ignore[arg-type]
                    reward_scale=_positive("reward_scale", reward_scale), model_path=model_path)
 
@@ -319,6 +320,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     | `model_overrides`      | mapping              | `None`        | simulated-plant changes [3]       |
     | `model_path`           | str                  | bundled XML   | another MJCF cart-pole            |
     | `normalize_action`     | bool                 | `False`       | actions in [−1, 1] (see Action Space) |
+    | `plant`                | str                  | "mujoco"      | or "linear-zoh" / "linear-euler" [5] |
     | `render_mode`          | str or None          | `None`        | "rgb_array": `mujoco.Renderer` [4] |
     | `width`, `height`      | int (px)             | `640`, `480`  | image size (≤ offscreen buffer)   |
 
@@ -327,6 +329,8 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     2 entries (N²·s, N²m²·s), for "force". [3] model mismatch: a mapping (or a `ModelOverrides`)
     of `pole_mass`, `pole_length`, `cart_mass`, their `*_scale`, `force_limit`, `timestep`.
     [4] a side view (the XML's `side` camera direction) that tracks the cart at 3 pole lengths.
+    [5] the MJCF model's linearisation stepped instead of MuJoCo: exact ZOH, or the lecture's
+    forward Euler at the control period (`pendulum_lqg.sim.Scenario.plant`).
 
     Invalid values raise `pendulum_lqg.errors.ConfigError` naming the parameter.
 
@@ -352,13 +356,14 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
                  reward_scale: float = DEFAULT_REWARD_SCALE,
                  model_overrides: Mapping[str, float] | ModelOverrides | None = None,
                  model_path: str | None = None, normalize_action: bool = False,
+                 plant: str = "mujoco",
                  render_mode: str | None = None, width: int = 640, height: int = 480) -> None:
         self.config = EnvConfig.build(
             control_period=control_period, duration=duration, observation_mode=observation_mode,
             noise_scale=noise_scale, process_noise=process_noise, process_density=process_density,
             measurement_variance=measurement_variance, x0=x0, x0_std=x0_std, theta_max=theta_max,
             cost_Q=cost_Q, cost_R=cost_R, reward_scale=reward_scale,
-            model_overrides=model_overrides, model_path=model_path)
+            model_overrides=model_overrides, model_path=model_path, plant=plant)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ConfigError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
@@ -545,6 +550,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
                  reward_scale: float = DEFAULT_REWARD_SCALE,
                  model_overrides: Mapping[str, float] | ModelOverrides | None = None,
                  model_path: str | None = None, normalize_action: bool = False,
+                 plant: str = "mujoco",
                  render_mode: str | None = None, width: int = 640, height: int = 480) -> None:
         self.num_envs = _positive_int("num_envs", num_envs)
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
@@ -556,7 +562,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
             noise_scale=noise_scale, process_noise=process_noise, process_density=process_density,
             measurement_variance=measurement_variance, x0=x0, x0_std=x0_std, theta_max=theta_max,
             cost_Q=cost_Q, cost_R=cost_R, reward_scale=reward_scale,
-            model_overrides=model_overrides, model_path=model_path)
+            model_overrides=model_overrides, model_path=model_path, plant=plant)
         if nthread is not None and (isinstance(nthread, bool) or not isinstance(nthread, int)
                                     or nthread < 0):
             raise ConfigError(f"nthread: expected a non-negative integer, got {nthread!r}")

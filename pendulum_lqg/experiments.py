@@ -63,9 +63,9 @@ TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "model_file", "s
 STUDIES = ("margins", "roa")
 GRID_KEYS = ("policy", "controller", "observer", "noise_scale", "control_period", "duration",
              "theta0", "estimate0", "discretization", "pole_mass_scale", "pole_length_scale",
-             "cart_mass_scale")
+             "cart_mass_scale", "plant")
 SCENARIO_KEYS = ("control_period", "duration", "x0", "x0_std", "estimate0", "theta_max",
-                 "settle_band", "cost_Q", "cost_R")
+                 "settle_band", "cost_Q", "cost_R", "plant")
 NOISE_KEYS = tuple(f.name for f in dataclasses.fields(NoiseModel))
 DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
 MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))
@@ -247,7 +247,7 @@ def _grid_point(values: dict[str, object], base: dict[str, dict[str, object]],
             tables["design"][key] = value
         elif key == "noise_scale":
             tables["noise"]["scale"] = value
-        elif key in ("control_period", "duration", "estimate0"):
+        elif key in ("control_period", "duration", "estimate0", "plant"):
             tables["scenario"][key] = value
         elif key == "theta0":
             x0 = list(tables["scenario"].get("x0", (0.0, 0.1, 0.0, 0.0)))  # type: ignore[arg-type]

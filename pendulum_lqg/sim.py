@@ -42,6 +42,7 @@ from pendulum_lqg.metrics import (
     MetricsAccumulator,
     period_integrals,
 )
+from pendulum_lqg.names import PLANTS
 from pendulum_lqg.noise import NoiseModel, NoiseStream
 from pendulum_lqg.plant import ModelOverrides, Plant
 
@@ -66,6 +67,10 @@ class Scenario:
     cost_Q, cost_R : weights of ``J = ∫ xᵀ diag(Q) x + R u² dt``
     overrides : model changes of the *simulated* plant (mismatch studies); designs use the
         nominal model unless told otherwise
+    plant : how the plant is simulated — ``"mujoco"`` (default), or the MJCF model's
+        linearisation about the upright: ``"linear-zoh"`` (exact discretisation) or
+        ``"linear-euler"`` (the lecture's own ``x ← x + T·(A x + B u) + δx`` per control period);
+        same noise streams, failure rule, metrics and policies
     """
 
     control_period: float = 0.01
@@ -79,6 +84,7 @@ class Scenario:
     cost_Q: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
     cost_R: float = 1.0
     overrides: ModelOverrides = field(default_factory=ModelOverrides)
+    plant: str = "mujoco"
 
     def __post_init__(self) -> None:
         for name in ("control_period", "duration", "theta_max", "settle_band", "cost_R"):
@@ -96,6 +102,11 @@ class Scenario:
             raise ConfigError("noise: expected a NoiseModel")
         if not isinstance(self.overrides, ModelOverrides):
             raise ConfigError("overrides: expected a ModelOverrides")
+        if self.plant not in PLANTS:
+            raise ConfigError(f"plant: expected one of {', '.join(PLANTS)}, got {self.plant!r}")
+        if self.plant != "mujoco" and self.noise.process == "force":
+            raise ConfigError(f"plant: {self.plant!r} takes process noise on the state (the "
+                              "lecture model); force noise needs plant = 'mujoco'")
 
     @property
     def n_periods(self) -> int:
@@ -202,6 +213,8 @@ class Simulator:
             self._rollout = mj_rollout.Rollout(nthread=self._nthread if self._nthread > 1 else 0)
             self._datas = [mujoco.MjData(self.model) for _ in range(max(1, self._nthread))]
         self._data = mujoco.MjData(self.model)
+        self._linear = _LinearPlant(plant, scenario.plant, self.h, self.k) \
+            if scenario.plant != "mujoco" else None
         self._capacity = 0
         self._streamed = bool(streamed_metrics)
         self.metrics: MetricsAccumulator | None = None
@@ -352,7 +365,9 @@ class Simulator:
         buf[:, :k, 4] = u[:, None]
         states = buf[:, 1:k + 1, :4]
         forces = self.noise.forces(self._w) if self._force_noise else None
-        if self.backend == "rollout":
+        if self._linear is not None:
+            reset_flag = self._linear.advance(self.x, u, states)
+        elif self.backend == "rollout":
             reset_flag = self._advance_rollout(u, forces, states)
         else:
             reset_flag = self._advance_step(u, forces, states)
@@ -474,6 +489,42 @@ class Simulator:
                                    np.where(pole[idx, s], FAIL_POLE, FAIL_TRACK))
             return failed, reason, fail_step
         return failed, reason, None
+
+
+class _LinearPlant:
+    """The linearised cart-pole stepped in place of MuJoCo (``Scenario.plant``), batched numpy.
+
+    ``linear-zoh``: ``x ← Φ_h x + Γ_h u`` at every physics step h (the exact ZOH of ``ẋ = Ax + Bu``,
+    so the end of the period is exactly ``Φ_T x + Γ_T u``). ``linear-euler``: the lecture's update
+    ``x ← x + T·(A x + B u)`` once per control period; the k physics-step samples in between (which
+    the failure rule and the cost integrate over) lie on the straight line to it, the last one
+    exactly on it. State noise is added at the end of the period by the core, as for MuJoCo.
+    """
+
+    def __init__(self, plant: Plant, kind: str, h: float, k: int) -> None:
+        from pendulum_lqg.design import euler, zoh
+        from pendulum_lqg.linearize import linearize
+
+        lin = linearize(plant)
+        self.kind, self.k = kind, k
+        if kind == "linear-zoh":
+            self.Phi, self.Gamma = zoh(lin.A, lin.B, h)
+        else:
+            self.Phi, self.Gamma = euler(lin.A, lin.B, k * h)       # I + TA, TB
+        self.Gamma = self.Gamma[:, 0]
+        self._frac = (np.arange(1, k + 1) / k)[None, :, None]
+
+    def advance(self, x: np.ndarray, u: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """States after each of the k physics steps into ``out`` (n, k, 4); nothing resets."""
+        if self.kind == "linear-zoh":
+            for j in range(self.k):
+                x = np.einsum("ij,nj->ni", self.Phi, x) + u[:, None] * self.Gamma
+                out[:, j] = x
+        else:
+            x_end = np.einsum("ij,nj->ni", self.Phi, x) + u[:, None] * self.Gamma
+            out[...] = x[:, None, :] + self._frac * (x_end - x)[:, None, :]
+            out[:, -1] = x_end
+        return np.zeros(x.shape[0], dtype=bool)
 
 
 #: Fewest physics steps a rollout chunk (one thread-pool task) should hold: smaller chunks cost
