@@ -15,6 +15,8 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from pendulum_lqg.names import CONTROLLERS, OBSERVERS, PLANTS
+
 EXIT_USAGE = 2
 #: The file ``run --spawn`` writes when no ``--record FILE`` is given.
 DEFAULT_RECORDING = "recording.rrd"
@@ -87,7 +89,6 @@ def _number(text: str) -> float:
     return v
 
 
-from pendulum_lqg.names import CONTROLLERS, OBSERVERS  # noqa: E402 (no numpy)
 
 
 def _add_design_options(p: argparse.ArgumentParser) -> None:
