@@ -149,3 +149,74 @@ def test_hinf_filter_gamma_bounds_the_error_system_norm(cartpole):
     assert _hinf_norm(A, loose.L, C, G, LECTURE_W, LECTURE_V, omegas) <= loose.bound
     with pytest.raises(DesignError, match="infeasible"):
         hinf_filter(A, G, C, LECTURE_W, LECTURE_V, gamma=0.5 * best.bound)
+
+
+# ---- the observers in the benchmark, and the lecture's linear simulation --------------------------
+NEW_OBSERVERS = ("reduced-order", "ackermann", "lmi", "h2", "hinf")
+
+
+@pytest.mark.parametrize("observer", NEW_OBSERVERS)
+def test_every_new_observer_stabilises_the_noise_free_loop(plant, observer):
+    from pendulum_lqg.metrics import summarize
+    from pendulum_lqg.noise import NoiseModel
+    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.sim import Scenario, run_episodes
+
+    scenario = Scenario(noise=NoiseModel.lecture(scale=0.0))         # θ₀ = 0.1, x̂₀ = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        policy = build_policy(f"dlqr+{observer}", plant=plant, scenario=scenario)
+    s = summarize(run_episodes(plant, scenario, policy, seed=0, episodes=range(100)).rows)
+    assert s["success_rate"] >= 0.99
+    assert np.isfinite(s["rms_est_err_p_dot"]["mean"])
+
+
+def test_h2_policy_equals_the_kalman_bucy_policy(plant):
+    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.sim import Scenario
+
+    scenario = Scenario()
+    h2 = build_policy("lqr+h2", plant=plant, scenario=scenario)
+    kb = build_policy("lqr+kalman-bucy", plant=plant, scenario=scenario)
+    np.testing.assert_allclose(h2.info["L"], kb.info["L"], rtol=1e-5,
+                               atol=1e-5 * np.abs(kb.info["L"]).max())
+
+
+@pytest.mark.parametrize("kind", ["linear-zoh", "linear-euler"])
+def test_linear_plants_follow_their_difference_equations(plant, kind):
+    """x[n+1] = Φ x[n] + Γ u[n] (exact ZOH) or x + T(A x + B u) (the lecture's Euler), sampled."""
+    from pendulum_lqg.design import zoh
+    from pendulum_lqg.noise import NoiseModel
+    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.sim import Scenario, run_episodes
+
+    scenario = Scenario(noise=NoiseModel.lecture(scale=0.0), plant=kind, duration=2.0)
+    policy = build_policy("dlqr+kalman", plant=plant, scenario=scenario)
+    tr = run_episodes(plant, scenario, policy, seed=0, episodes=[0], trajectory=True).trajectories[0]
+    lin = linearize(plant)
+    T = scenario.control_period
+    x, u = tr.x, tr.u
+    if kind == "linear-zoh":
+        Phi, Gamma = zoh(lin.A, lin.B, T)
+        expected = x[:-1] @ Phi.T + u[:-1, None] * Gamma[:, 0]
+    else:
+        expected = x[:-1] + T * (x[:-1] @ lin.A.T + u[:-1, None] * lin.B[:, 0])
+    np.testing.assert_allclose(x[1:], expected, rtol=1e-9, atol=1e-12)
+    # the same noise streams as MuJoCo: noisy runs differ only by the plant
+    noisy = Scenario(plant=kind, duration=2.0)
+    a = run_episodes(plant, noisy, policy, seed=0, episodes=[0], trajectory=True).trajectories[0]
+    b = run_episodes(plant, noisy.replace(plant="mujoco"), policy, seed=0, episodes=[0],
+                     trajectory=True).trajectories[0]
+    np.testing.assert_array_equal(a.y[0] - a.x[0, :2], b.y[0] - b.x[0, :2])   # same v[0]
+
+
+def test_linear_plant_refuses_force_noise():
+    from pendulum_lqg.errors import ConfigError
+    from pendulum_lqg.noise import NoiseModel
+    from pendulum_lqg.sim import Scenario
+
+    with pytest.raises(ConfigError, match="plant: 'linear-euler' takes process noise on the state"):
+        Scenario(plant="linear-euler",
+                 noise=NoiseModel(process="force", process_density=(0.01, 0.001)))
+    with pytest.raises(ConfigError, match="plant: expected one of mujoco, linear-zoh"):
+        Scenario(plant="linear")
