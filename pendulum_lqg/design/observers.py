@@ -14,6 +14,7 @@ The LMIs are solved with ``cvxpy`` and the Clarabel interior-point solver (impor
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -199,8 +200,10 @@ def _solve(problem: object, what: str) -> str:
     import cvxpy as cp
 
     try:
-        problem.solve(solver=cp.CLARABEL, tol_gap_abs=LMI_TOLERANCE,  # type: ignore[attr-defined]
-                      tol_gap_rel=LMI_TOLERANCE, tol_feas=LMI_TOLERANCE)
+        with warnings.catch_warnings():   # "may be inaccurate": the status says so, checked below
+            warnings.simplefilter("ignore", UserWarning)
+            problem.solve(solver=cp.CLARABEL, tol_gap_abs=LMI_TOLERANCE,  # type: ignore[attr-defined]
+                          tol_gap_rel=LMI_TOLERANCE, tol_feas=LMI_TOLERANCE)
     except cp.error.SolverError as exc:
         raise DesignError(f"{what}: the LMI solver failed: {' '.join(str(exc).split())}") from exc
     status = str(problem.status)  # type: ignore[attr-defined]
@@ -244,18 +247,21 @@ def lmi_observer(A: ArrayLike, C: ArrayLike, *, decay: float) -> LMIObserverResu
     status = _solve(prob, "lmi_observer")
     Pv = np.asarray(P.value)
     L = np.linalg.solve(Pv, np.asarray(Y.value))
-    return LMIObserverResult(L=L, poles=np.linalg.eigvals(A - L @ C), P=Pv, bound=alpha,
-                             status=status)
+    poles = np.linalg.eigvals(A - L @ C)
+    if poles.real.max() > -alpha + 1e-6 * max(1.0, alpha):    # an inaccurate solve must still hold
+        raise DesignError(f"lmi_observer: the solver's gain misses the decay rate {alpha:g} "
+                          f"(slowest pole {poles.real.max():.6g}; status {status})")
+    return LMIObserverResult(L=L, poles=poles, P=Pv, bound=alpha, status=status)
 
 
 def _filter_data(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike,
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
     """Checked data, with ``W`` and ``V`` both multiplied by ``k`` so the larger is 1.
 
     The optimal gains do not change when both noise densities are scaled by the same ``k``
     (``Σ → kΣ``, ``L = ΣCᵀV⁻¹`` unchanged; the H∞ bound scales by ``√k``), while the solver's
     tolerances, relative to O(1) data, become meaningful: the lecture's densities are ~1e-4.
-    Returns ``A, G, C, (kW)^{1/2}, (kV)^{1/2}, k``.
+    Returns ``A, C, G (kW)^{1/2}, (kV)^{1/2}, k``.
     """
     A = as_square("A", A)
     n = A.shape[0]
@@ -265,7 +271,7 @@ def _filter_data(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: Arra
     V = as_weight("V", V, C.shape[0], definite=True)
     require_detectable(A, C, discrete=False, names="(A, C)")
     k = 1.0 / max(np.abs(G @ W @ G.T).max(), np.abs(V).max())
-    return A, G, C, _sqrtm(k * W), _sqrtm(k * V), k
+    return A, C, G @ _sqrtm(k * W), _sqrtm(k * V), k
 
 
 def _sqrtm(S: np.ndarray) -> np.ndarray:
@@ -297,12 +303,9 @@ def h2_filter(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLi
     """
     import cvxpy as cp
 
-    A, G, C, Wh, Vh, k = _filter_data(A, G, C, W, V)
-    n, p = A.shape[0], C.shape[0]
-    Gw = G @ Wh
-    q = Gw.shape[1]
-    P = cp.Variable((n, n), symmetric=True)
-    Y = cp.Variable((n, p))
+    A, C, Gw, Vh, k = _filter_data(A, G, C, W, V)
+    n, p, q = A.shape[0], C.shape[0], Gw.shape[1]
+    P, Y = cp.Variable((n, n), symmetric=True), cp.Variable((n, p))
     Z = cp.Variable((n, n), symmetric=True)
     M = cp.bmat([[A.T @ P + P @ A - C.T @ Y.T - Y @ C, P @ Gw, Y @ Vh],
                  [(P @ Gw).T, -np.eye(q), np.zeros((q, p))],
@@ -346,12 +349,9 @@ def hinf_filter(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: Array
     """
     import cvxpy as cp
 
-    A, G, C, Wh, Vh, k = _filter_data(A, G, C, W, V)
-    n, p = A.shape[0], C.shape[0]
-    Gw = G @ Wh
-    q = Gw.shape[1]
-    P = cp.Variable((n, n), symmetric=True)
-    Y = cp.Variable((n, p))
+    A, C, Gw, Vh, k = _filter_data(A, G, C, W, V)
+    n, p, q = A.shape[0], C.shape[0], Gw.shape[1]
+    P, Y = cp.Variable((n, n), symmetric=True), cp.Variable((n, p))
     if gamma is None:
         g2 = cp.Variable(nonneg=True)
         objective = cp.Minimize(g2)
