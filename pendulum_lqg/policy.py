@@ -13,7 +13,11 @@ Observers
     ``none`` true state · ``luenberger`` current form, continuous poles mapped by z = e^{sT} ·
     ``kalman`` steady-state filter (current) form · ``kalman-predictor`` steady-state predictor form ·
     ``kalman-tv`` time-varying filter from ``M0`` · ``kalman-bucy`` continuous Kalman–Bucy design,
-    its observer ODE discretised by ZOH (a predictor-type recursion).
+    its observer ODE discretised by ZOH (a predictor-type recursion) · ``kalman-delay`` the
+    steady-state filter of the state augmented with the scenario's measurement and actuator delay
+    lines (exact for whole periods), whose controller acts on the state predicted over the actuator
+    delay, ``u_n = −K x̂_{n+d_a|n}`` (:func:`~pendulum_lqg.design.augment_delays`). The other
+    observers ignore delays (no compensation).
 """
 
 from __future__ import annotations
@@ -30,6 +34,7 @@ from pendulum_lqg.design._checks import as_poles
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.estimators import (
     CurrentEstimator,
+    DelayKalman,
     Estimator,
     PredictorEstimator,
     TimeVaryingKalman,
@@ -42,9 +47,10 @@ from pendulum_lqg.plant import Plant
 
 CONTROLLERS: tuple[str, ...] = ("lqr", "dlqr")
 OBSERVERS: tuple[str, ...] = ("none", "luenberger", "kalman", "kalman-predictor", "kalman-tv",
-                              "kalman-bucy")
+                              "kalman-bucy", "kalman-delay")
 Controller = Literal["lqr", "dlqr"]
-Observer = Literal["none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy"]
+Observer = Literal["none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy",
+                   "kalman-delay"]
 
 
 @dataclass(frozen=True)
@@ -181,7 +187,7 @@ def per_sample_process_covariance(plant_lin: ContinuousModel, noise: NoiseModel,
 
 def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
                   spec: DesignSpec | None = None, *, linear: ContinuousModel | None = None,
-                  ) -> Policy:
+                  delays: tuple[int, int] = (0, 0)) -> Policy:
     """Design the policy ``spec`` for ``plant`` at ``control_period`` with the nominal noise.
 
     Parameters
@@ -191,6 +197,8 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
     noise : nominal noise model (its ``scale`` is ignored: designs use the nominal densities)
     spec : controller / observer choice and weights
     linear : a precomputed :func:`~pendulum_lqg.linearize.linearize` result (to save time)
+    delays : ``(measurement, actuator)`` delays in control periods that ``kalman-delay``
+        compensates (:func:`delay_periods` of the scenario; the other observers ignore them)
     """
     spec = spec or DesignSpec()
     steps_per_period(plant, control_period)
@@ -236,16 +244,30 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
         est = TimeVaryingKalman(Phi, Gamma, C, Qd_noise, V, M0)
         kf = design.dkalman(Phi, np.eye(4), C, Qd_noise, V)
         info["L"], info["observer_poles"], info["M0"] = kf.L, kf.poles, M0
+    elif spec.observer == "kalman-delay":
+        aug = design.augment_delays(Phi, Gamma, C, measurement_delay=int(delays[0]),
+                                    actuator_delay=int(delays[1]))
+        kf = design.dkalman(aug.Phi, aug.G, aug.C, Qd_noise, V)
+        est = DelayKalman(aug.Phi, aug.Gamma, aug.C, kf.L, aug.predict, P=kf.P, M=kf.M)
+        info["L"], info["observer_poles"], info["P_kalman"] = kf.L, kf.poles, kf.P
+        info["delays"], info["predict"] = tuple(int(d) for d in delays), aug.predict
     else:  # kalman-bucy
         G, W = noise_design_matrices(lin, noise, dt)
         kb = design.kalman(A, G, C, W, noise.V_density(dt))
         F, G_u, G_y = _emulated_observer(A, B, C, kb.L, dt)
-        est = PredictorEstimator(F, G_u, G_y, C, gain=kb.L, P=kb.P)
+        est = PredictorEstimator(F, G_u, G_y, C, gain=kb.L, P=kb.P, Phi=Phi, Gamma=Gamma)
         info["L"], info["observer_poles"] = kb.L, np.linalg.eigvals(F)
         info["observer_poles_continuous"] = kb.poles
     info["noise_Qd"], info["noise_V"] = Qd_noise, V
     return Policy(K=ctrl.K, estimator=est, u_max=plant.u_max,
                   name=f"{spec.controller}+{spec.observer}", info=info)
+
+
+def delay_periods(scenario: object) -> tuple[int, int]:
+    """``(measurement, actuator)`` delays of a :class:`~pendulum_lqg.sim.Scenario` in periods —
+    what :func:`design_policy` takes as ``delays``."""
+    return (int(getattr(scenario, "measurement_delay_periods", 0)),
+            int(getattr(scenario, "actuator_delay_periods", 0)))
 
 
 def design_all(plant: Plant, control_period: float, noise: NoiseModel,

@@ -12,9 +12,11 @@ module                 contents
 ``structure``          controllability / observability ranks and PBH tests
 ``discretize``         :func:`zoh`, :func:`euler`, :func:`process_noise_covariance`,
                        :func:`sampled_cost`
+``delay``              :func:`augment_delays`: integer-period measurement / actuator delay lines
 =====================  =====================================================================
 """
 
+from pendulum_lqg.design.delay import DelayAugmented, augment_delays
 from pendulum_lqg.design.discretize import (
     c2d_poles,
     euler,
@@ -55,6 +57,7 @@ from pendulum_lqg.design.structure import (
 __all__ = [
     "DEFAULT_OBSERVER_POLES",
     "DKalmanResult",
+    "DelayAugmented",
     "FiniteHorizonLQR",
     "KalmanResult",
     "LQGResult",
@@ -62,6 +65,7 @@ __all__ = [
     "ObserverResult",
     "StructureReport",
     "TimeVaryingKalmanGains",
+    "augment_delays",
     "bryson",
     "c2d_poles",
     "controllability_matrix",
