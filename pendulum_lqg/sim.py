@@ -209,6 +209,8 @@ class StepResult:
     failed : (n,) bool, the episode ended in this period
     reason : (n,) int failure codes (``metrics.FAIL_*``)
     states : (n, k, 4) physics-rate states over the period (always available; cheap views)
+    forces : (n, k) the force applied over each physics step (after saturation, actuator delay
+        and lag; a view, valid until the next step)
     """
 
     x: np.ndarray
@@ -216,6 +218,7 @@ class StepResult:
     failed: np.ndarray
     reason: np.ndarray
     states: np.ndarray
+    forces: np.ndarray | None = None
 
 
 class Simulator:
@@ -471,7 +474,8 @@ class Simulator:
         self.t = self.t + self.dt
         self.period = self.period + 1
         self.x = buf[:, k + 1, :4].copy()
-        return StepResult(x=self.x, cost=cost, failed=failed, reason=reason, states=states)
+        return StepResult(x=self.x, cost=cost, failed=failed, reason=reason, states=states,
+                          forces=buf[:, :k, 4])
 
     def select(self, rows: np.ndarray) -> None:
         """Keep only these rows (drop finished episodes from the batch)."""
