@@ -29,7 +29,7 @@ import numpy as np
 from pendulum_lqg.env import CartPoleLQGEnv, CartPoleLQGVectorEnv
 from pendulum_lqg.errors import ConfigError, ShapeError
 from pendulum_lqg.plant import load_plant
-from pendulum_lqg.policy import DesignSpec, Policy, design_policy
+from pendulum_lqg.policy import DesignSpec, Policy, delay_periods, design_policy
 
 
 class LQGAgent:
@@ -71,7 +71,8 @@ class LQGAgent:
             plant = load_plant(plant.path)
         scenario = base.scenario
         self.spec = spec
-        self.policy: Policy = design_policy(plant, scenario.control_period, scenario.noise, spec)
+        self.policy: Policy = design_policy(plant, scenario.control_period, scenario.noise, spec,
+                                            delays=delay_periods(scenario))
         wants = "state" if self.policy.needs_state else "measurement"
         if base.observation_mode != wants:
             raise ConfigError(f"observer: {spec.observer!r} needs observation_mode={wants!r}, "

@@ -161,6 +161,21 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the simulated plant: MuJoCo, or the model's linearisation discretised "
                         "exactly (linear-zoh) or by the lecture's forward Euler at the control "
                         "period (linear-euler) (default mujoco)")
+    g = p.add_argument_group("sensing and actuation")
+    g.add_argument("--measurement-delay", type=_number, default=0.0, metavar="S",
+                   help="age of the measurement the policy receives, in s (a whole number of "
+                        "control periods; default 0)")
+    g.add_argument("--actuator-delay", type=_number, default=0.0, metavar="S",
+                   help="delay of the force, in s (a whole number of control periods; default 0)")
+    g.add_argument("--dropout", type=_number, default=0.0, metavar="P",
+                   help="probability that a measurement sample is lost (the policy gets nan; "
+                        "default 0)")
+    g.add_argument("--actuator-tau", type=_number, default=0.0, metavar="S",
+                   help="time constant of a first-order lag of the force, in s (default 0: none)")
+    g.add_argument("--randomize", action="append", default=None, metavar="KEY=LO:HI",
+                   help="per-episode uniform scale of a parameter of the simulated plant, e.g. "
+                        "pole_mass_scale=0.8:1.2 (repeatable; keys pole_mass_scale, "
+                        "pole_length_scale, cart_mass_scale; default: none)")
     p.add_argument("--backend", choices=("rollout", "step"), default="rollout",
                    help="batched mujoco.rollout or a plain mj_step loop; bit-identical results "
                         "(default rollout)")
@@ -416,7 +431,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     noise = _noise_from_args(args, scale=args.noise_scale)
     scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,
                         x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0,
-                        plant=args.plant)
+                        plant=args.plant,
+                        measurement_delay=args.measurement_delay,
+                        actuator_delay=args.actuator_delay, dropout=args.dropout,
+                        actuator_tau=args.actuator_tau, randomize=_randomize(args.randomize))
     plugin = is_plugin_ref(name)
     spec = _spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
     policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)
@@ -451,6 +469,20 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _randomize(items: list[str] | None) -> dict[str, list[float]]:
+    """``--randomize KEY=LO:HI`` options as the ``randomize`` mapping of a Scenario."""
+    out: dict[str, list[float]] = {}
+    for item in items or []:
+        key, _, rng = item.partition("=")
+        lo, _, hi = rng.partition(":")
+        try:
+            out[key.strip()] = [float(lo), float(hi)]
+        except ValueError:
+            raise _cfg_error(f"--randomize: expected KEY=LO:HI such as pole_mass_scale=0.8:1.2, "
+                             f"got {item!r}") from None
+    return out
+
+
 def _dataclass_dict(obj: Any) -> dict[str, Any]:
     import dataclasses
 
@@ -468,6 +500,11 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None
     con.print(escape(f"{name} — {s['episodes']} episodes, seed {config['seed']}, "
                      f"T = {sc['control_period']} s, {sc['duration']} s, noise scale "
                      f"{sc['noise']['scale']}, x0 = {list(sc['x0'])}"))
+    extras = {k: sc[k] for k in ("measurement_delay", "actuator_delay", "dropout", "actuator_tau",
+                                 "randomize") if sc.get(k)}
+    if extras:
+        con.print(escape("sensing and actuation: " + ", ".join(f"{k} = {v}"
+                                                                 for k, v in extras.items())))
     con.print(f"success: {s['successes']}/{s['episodes']} = {s['success_rate']:.1%} "
               f"(95 % Wilson CI {lo:.1%} – {hi:.1%})"
               + escape(f"; failures: {s['failures']}" if s["failures"] else ""))

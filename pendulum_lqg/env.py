@@ -81,7 +81,9 @@ class EnvConfig:
               measurement_variance: float | Sequence[float], x0: Sequence[float],
               x0_std: Sequence[float], theta_max: float, cost_Q: Sequence[float], cost_R: float,
               reward_scale: float, model_overrides: Mapping[str, float] | ModelOverrides | None,
-              model_path: str | None, plant: str = "mujoco") -> EnvConfig:
+              model_path: str | None, plant: str = "mujoco", measurement_delay: float = 0.0,
+              actuator_delay: float = 0.0, dropout: float = 0.0, actuator_tau: float = 0.0,
+              randomize: Mapping[str, Sequence[float]] | None = None) -> EnvConfig:
         if observation_mode not in OBSERVATION_MODES:
             raise ConfigError(f"observation_mode: expected 'measurement' or 'state', got "
                               f"{observation_mode!r}")
@@ -112,7 +114,11 @@ class EnvConfig:
         scenario = Scenario(control_period=control_period, duration=duration, noise=noise,
                             x0=x0, x0_std=x0_std, theta_max=theta_max,  # type: ignore[arg-type]
                             cost_Q=cost_Q, cost_R=cost_R, overrides=overrides,  # type: ignore[arg-type]
-                            plant=plant)
+                            plant=plant,
+                            measurement_delay=measurement_delay, actuator_delay=actuator_delay,
+                            dropout=dropout, actuator_tau=actuator_tau,
+                            randomize=dict(randomize) if isinstance(randomize, Mapping)
+                            else randomize)  # type: ignore[arg-type]
         return cls(scenario=scenario, observation_mode=observation_mode,  # type: ignore[arg-type]
                    reward_scale=_positive("reward_scale", reward_scale), model_path=model_path)
 
@@ -320,7 +326,12 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     | `model_overrides`      | mapping              | `None`        | simulated-plant changes [3]       |
     | `model_path`           | str                  | bundled XML   | another MJCF cart-pole            |
     | `normalize_action`     | bool                 | `False`       | actions in [−1, 1] (see Action Space) |
-    | `plant`                | str                  | "mujoco"      | or "linear-zoh" / "linear-euler" [5] |
+    | `plant`                | str                  | "mujoco"      | or "linear-zoh" / "linear-euler" [7] |
+    | `measurement_delay`    | float (s)            | `0.0`         | age of `y`, whole periods [5]     |
+    | `actuator_delay`       | float (s)            | `0.0`         | delay of the force, whole periods |
+    | `dropout`              | float in [0, 1)      | `0.0`         | P(a sample is lost → `nan`) [5]   |
+    | `actuator_tau`         | float (s)            | `0.0`         | first-order force lag (0: none)   |
+    | `randomize`            | mapping              | `None`        | per-episode scales [6]            |
     | `render_mode`          | str or None          | `None`        | "rgb_array": `mujoco.Renderer` [4] |
     | `width`, `height`      | int (px)             | `640`, `480`  | image size (≤ offscreen buffer)   |
 
@@ -329,7 +340,12 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     2 entries (N²·s, N²m²·s), for "force". [3] model mismatch: a mapping (or a `ModelOverrides`)
     of `pole_mass`, `pole_length`, `cart_mass`, their `*_scale`, `force_limit`, `timestep`.
     [4] a side view (the XML's `side` camera direction) that tracks the cart at 3 pole lengths.
-    [5] the MJCF model's linearisation stepped instead of MuJoCo: exact ZOH, or the lecture's
+    [5] the observation is `[nan, nan]` for a lost sample and for the first `measurement_delay / T`
+    steps of an episode (nothing has arrived yet); the `state` observation is never delayed.
+    [6] `{"pole_mass_scale": (lo, hi), "pole_length_scale": …, "cart_mass_scale": …}`, uniform
+    draws from a child of the episode's generator, so `reset(seed=s)` gives the same plant as the
+    benchmark's episode (see `pendulum_lqg.sim.Scenario`).
+    [7] the MJCF model's linearisation stepped instead of MuJoCo: exact ZOH, or the lecture's
     forward Euler at the control period (`pendulum_lqg.sim.Scenario.plant`).
 
     Invalid values raise `pendulum_lqg.errors.ConfigError` naming the parameter.
@@ -357,13 +373,18 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
                  model_overrides: Mapping[str, float] | ModelOverrides | None = None,
                  model_path: str | None = None, normalize_action: bool = False,
                  plant: str = "mujoco",
+                 measurement_delay: float = 0.0, actuator_delay: float = 0.0,
+                 dropout: float = 0.0, actuator_tau: float = 0.0,
+                 randomize: Mapping[str, Sequence[float]] | None = None,
                  render_mode: str | None = None, width: int = 640, height: int = 480) -> None:
         self.config = EnvConfig.build(
             control_period=control_period, duration=duration, observation_mode=observation_mode,
             noise_scale=noise_scale, process_noise=process_noise, process_density=process_density,
             measurement_variance=measurement_variance, x0=x0, x0_std=x0_std, theta_max=theta_max,
             cost_Q=cost_Q, cost_R=cost_R, reward_scale=reward_scale,
-            model_overrides=model_overrides, model_path=model_path, plant=plant)
+            model_overrides=model_overrides, model_path=model_path, plant=plant,
+            measurement_delay=measurement_delay, actuator_delay=actuator_delay, dropout=dropout,
+            actuator_tau=actuator_tau, randomize=randomize)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ConfigError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
@@ -551,6 +572,9 @@ class CartPoleLQGVectorEnv(VectorEnv):
                  model_overrides: Mapping[str, float] | ModelOverrides | None = None,
                  model_path: str | None = None, normalize_action: bool = False,
                  plant: str = "mujoco",
+                 measurement_delay: float = 0.0, actuator_delay: float = 0.0,
+                 dropout: float = 0.0, actuator_tau: float = 0.0,
+                 randomize: Mapping[str, Sequence[float]] | None = None,
                  render_mode: str | None = None, width: int = 640, height: int = 480) -> None:
         self.num_envs = _positive_int("num_envs", num_envs)
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
@@ -562,7 +586,9 @@ class CartPoleLQGVectorEnv(VectorEnv):
             noise_scale=noise_scale, process_noise=process_noise, process_density=process_density,
             measurement_variance=measurement_variance, x0=x0, x0_std=x0_std, theta_max=theta_max,
             cost_Q=cost_Q, cost_R=cost_R, reward_scale=reward_scale,
-            model_overrides=model_overrides, model_path=model_path, plant=plant)
+            model_overrides=model_overrides, model_path=model_path, plant=plant,
+            measurement_delay=measurement_delay, actuator_delay=actuator_delay, dropout=dropout,
+            actuator_tau=actuator_tau, randomize=randomize)
         if nthread is not None and (isinstance(nthread, bool) or not isinstance(nthread, int)
                                     or nthread < 0):
             raise ConfigError(f"nthread: expected a non-negative integer, got {nthread!r}")

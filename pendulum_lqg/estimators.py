@@ -9,12 +9,20 @@ recordings and benchmarks can read them:
 * for Kalman filters ``P`` (a-posteriori covariance), ``M`` (a-priori) and ``gain``.
 
 The interface is two calls per control period: ``estimate(y) -> x̂`` and then ``update(u)`` with the
-input actually applied. Products with small matrices use ``einsum`` (no BLAS) so a row's result does
+input actually applied.
+
+A lost sample (``Scenario.dropout``, or a measurement delay's first samples) arrives as a row of
+``nan``: every estimator here then runs its prediction only for that row — the estimate is the
+a-priori one (``x̂ = x̄``) and the next prior its time update with the input alone; the row's
+``innovation`` is ``nan``. (The time-varying Kalman filter keeps the gain schedule of its age.)
+
+Products with small matrices use ``einsum`` (no BLAS) so a row's result does
 not depend on the batch size: batched and single-episode runs agree bit for bit.
 """
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 
 import numpy as np
@@ -25,6 +33,21 @@ from pendulum_lqg.errors import ShapeError
 def mv(M: np.ndarray, X: np.ndarray) -> np.ndarray:
     """Row-wise ``M @ x`` for a batch ``X`` (n, j) → (n, i); bitwise independent of n."""
     return np.einsum("ij,nj->ni", M, X)
+
+
+def lost_rows(y: np.ndarray) -> np.ndarray | None:
+    """Rows of ``y`` with a nan (lost samples), or ``None`` when every entry is finite (one sum
+    is the fast check)."""
+    if math.isfinite(y.sum()):
+        return None
+    lost = ~np.isfinite(y).all(axis=1)
+    return lost if lost.any() else None
+
+
+def predict_only(lost: np.ndarray | None, prior: np.ndarray, posterior: np.ndarray,
+                 ) -> np.ndarray:
+    """``posterior`` with the lost rows replaced by their ``prior`` (no measurement update)."""
+    return posterior if lost is None else np.where(lost[:, None], prior, posterior)
 
 
 class Estimator(ABC):
@@ -107,6 +130,7 @@ class CurrentEstimator(Estimator):
         self.x_prior = self._prior
         self.innovation = y - mv(self.C, self.x_prior)                     # y − C x̄
         self.x_hat = self.x_prior + mv(self.gain, self.innovation)         # x̂ = x̄ + L(y − Cx̄)
+        self.x_hat = predict_only(lost_rows(y), self.x_prior, self.x_hat)
         return self.x_hat
 
     def update(self, u: np.ndarray) -> None:
@@ -120,16 +144,21 @@ class PredictorEstimator(Estimator):
 
     For a discrete predictor observer ``F = Φ − L_p C``, ``G_u = Γ``, ``G_y = L_p``; for an emulated
     continuous observer (Kalman–Bucy) the ZOH of ``ẋ̂ = (A − LC)x̂ + Bu + Ly``. The control at sample
-    n uses ``x̂_n``, which has seen measurements up to n − 1 only.
+    n uses ``x̂_n``, which has seen measurements up to n − 1 only. A lost sample's row is predicted
+    with the model alone, ``x̂_{n+1} = Φ x̂_n + Γ u_n`` (``Phi``, ``Gamma``; default ``F + G_y C`` and
+    ``G_u``, exact for the discrete predictor).
     """
 
     form = "predictor"
 
     def __init__(self, F: np.ndarray, G_u: np.ndarray, G_y: np.ndarray, C: np.ndarray, *,
                  gain: np.ndarray | None = None, P: np.ndarray | None = None,
-                 M: np.ndarray | None = None) -> None:
+                 M: np.ndarray | None = None, Phi: np.ndarray | None = None,
+                 Gamma: np.ndarray | None = None) -> None:
         super().__init__(F.shape[0])
         self.F, self.G_u, self.G_y, self.C = F, G_u, G_y, C
+        self.Phi = F + G_y @ C if Phi is None else Phi
+        self.Gamma = G_u if Gamma is None else Gamma
         self.gain = G_y if gain is None else gain
         self.P, self.M = P, M
         self._y = np.zeros((0, C.shape[0]))
@@ -142,6 +171,10 @@ class PredictorEstimator(Estimator):
 
     def update(self, u: np.ndarray) -> None:
         self._prior = mv(self.F, self.x_hat) + mv(self.G_u, u) + mv(self.G_y, self._y)
+        lost = lost_rows(self._y)
+        if lost is not None:                                # prediction only: Φ x̂ + Γ u
+            model = mv(self.Phi, self.x_hat) + mv(self.Gamma, u)
+            self._prior = predict_only(lost, model, self._prior)
 
     def select(self, rows: np.ndarray) -> None:
         super().select(rows)
@@ -204,6 +237,7 @@ class TimeVaryingKalman(Estimator):
         if ages.size <= 1:                                  # the whole batch at one age
             self.M, self.P, self.gain = self._covariances(int(ages[0]) if ages.size else 0)
             self.x_hat = self.x_prior + mv(self.gain, self.innovation)
+            self.x_hat = predict_only(lost_rows(y), self.x_prior, self.x_hat)
             return self.x_hat
         n = self._age.size
         self.M, self.P = np.empty((n, *self.M0.shape)), np.empty((n, *self.M0.shape))
@@ -214,6 +248,7 @@ class TimeVaryingKalman(Estimator):
             M, P, L = self._covariances(a)
             self.M[rows], self.P[rows], self.gain[rows] = M, P, L
             self.x_hat[rows] = self.x_prior[rows] + mv(L, self.innovation[rows])
+        self.x_hat = predict_only(lost_rows(y), self.x_prior, self.x_hat)
         return self.x_hat
 
     def update(self, u: np.ndarray) -> None:
@@ -269,6 +304,9 @@ class ReducedOrderEstimator(Estimator):
 
     def estimate(self, y: np.ndarray) -> np.ndarray:
         self.x_prior = self._reconstruct(self._y)
+        lost = lost_rows(y)
+        if lost is not None:            # a lost sample: hold the row's last measurement
+            y = np.where(lost[:, None], self._y, y)
         self._y = y
         self.x_hat = self._reconstruct(y)
         self.innovation = np.zeros_like(y)
@@ -280,3 +318,64 @@ class ReducedOrderEstimator(Estimator):
     def select(self, rows: np.ndarray) -> None:
         super().select(rows)
         self._z, self._y = self._z[rows], self._y[rows]
+
+
+class DelayKalman(Estimator):
+    r"""Steady-state Kalman filter (current form) of the delay-augmented state, and the prediction
+    over the actuator delay (:func:`pendulum_lqg.design.augment_delays`).
+
+    .. math::
+        \hat z_n = \bar z_n + L_a(y_n - C_a\bar z_n), \qquad
+        \bar z_{n+1} = \Phi_a\hat z_n + \Gamma_a u_n, \qquad
+        \hat x_{n+d_a|n} = \Pi\,\hat z_n
+
+    :meth:`estimate` returns :math:`\hat x_{n+d_a|n}` — the state at which the force requested now
+    will act — for the controller; ``x_hat`` / ``x_prior`` are the estimates of the *current*
+    state :math:`x_n` (the first block of :math:`\hat z_n, \bar z_n`, what the estimation-error
+    metrics compare with), ``x_control`` the prediction, ``z_hat`` the augmented estimate; ``P``
+    and ``M`` the covariances of :math:`x_n` (``P_augmented``, ``M_augmented`` the whole ones).
+    A row starts with the delay lines at 0: no output has arrived and no force is on its way.
+    """
+
+    form = "current"
+
+    def __init__(self, Phi_a: np.ndarray, Gamma_a: np.ndarray, C_a: np.ndarray, L_a: np.ndarray,
+                 predict: np.ndarray, *, P: np.ndarray, M: np.ndarray) -> None:
+        super().__init__(predict.shape[0])
+        self.Phi, self.Gamma, self.C, self.gain, self.predict = Phi_a, Gamma_a, C_a, L_a, predict
+        self.P_augmented, self.M_augmented = P, M
+        n = self.n_state
+        self.P, self.M = P[:n, :n], M[:n, :n]
+        self._z_prior = np.zeros((0, Phi_a.shape[0]))
+        self.z_hat = np.zeros((0, Phi_a.shape[0]))
+        self.x_control = np.zeros((0, n))
+
+    def reset(self, x_hat0: np.ndarray, rows: np.ndarray | None = None) -> None:
+        super().reset(x_hat0, rows)
+        x_hat0 = np.asarray(x_hat0, dtype=float)
+        z0 = np.zeros((x_hat0.shape[0], self.Phi.shape[0]))
+        z0[:, :self.n_state] = x_hat0
+        if rows is None:
+            self._z_prior, self.z_hat = z0, z0.copy()
+            self.x_control = mv(self.predict, z0)
+        else:
+            self._z_prior[rows], self.z_hat[rows] = z0, z0
+            self.x_control[rows] = mv(self.predict, z0)
+
+    def estimate(self, y: np.ndarray) -> np.ndarray:
+        n = self.n_state
+        z_prior = self._z_prior
+        self.innovation = y - mv(self.C, z_prior)                          # y − C_a z̄
+        z_hat = z_prior + mv(self.gain, self.innovation)                   # ẑ = z̄ + L_a(…)
+        self.z_hat = predict_only(lost_rows(y), z_prior, z_hat)
+        self.x_prior, self.x_hat = z_prior[:, :n], self.z_hat[:, :n]
+        self.x_control = mv(self.predict, self.z_hat)                      # x̂_{n+d_a|n} = Π ẑ
+        return self.x_control
+
+    def update(self, u: np.ndarray) -> None:
+        self._z_prior = mv(self.Phi, self.z_hat) + mv(self.Gamma, u)       # z̄⁺ = Φ_a ẑ + Γ_a u
+
+    def select(self, rows: np.ndarray) -> None:
+        super().select(rows)
+        self._z_prior, self.z_hat = self._z_prior[rows], self.z_hat[rows]
+        self.x_control = self.x_control[rows]

@@ -33,8 +33,14 @@ Grid keys: ``policy`` ("controller+observer", or a user's plugin "MODULE:ATTR" /
 "path/to/file.py:ATTR", relative to the experiment file's folder), ``controller``, ``observer``,
 ``noise_scale``,
 ``control_period``, ``duration``, ``theta0``, ``estimate0``, ``discretization``,
-``pole_mass_scale``, ``pole_length_scale``, ``cart_mass_scale``. Unknown keys anywhere are an error
-that lists the known ones.
+``pole_mass_scale``, ``pole_length_scale``, ``cart_mass_scale``, ``measurement_delay``,
+``actuator_delay``, ``dropout``, ``actuator_tau``, and the pair ``delay`` [s] + ``delay_kind``
+(``"measurement"`` or ``"actuator"``: which delay ``delay`` sets — one sweep over both kinds). Unknown
+keys anywhere are an error that lists the known ones.
+
+Sensing and actuation in ``[scenario]`` (see :class:`pendulum_lqg.sim.Scenario`):
+``measurement_delay``, ``actuator_delay`` [s, whole control periods], ``dropout`` (probability a
+sample is lost), ``actuator_tau`` [s], ``randomize = {pole_mass_scale = [0.8, 1.2], …}``.
 
 The sweep is a list of :class:`WorkUnit` (configuration × episode chunk): plain, JSON-serialisable and
 independent, so they can run in any order or on other machines; :func:`run_unit` runs one.
@@ -63,9 +69,13 @@ TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "model_file", "s
 STUDIES = ("margins", "roa")
 GRID_KEYS = ("policy", "controller", "observer", "noise_scale", "control_period", "duration",
              "theta0", "estimate0", "discretization", "pole_mass_scale", "pole_length_scale",
-             "cart_mass_scale", "plant")
+             "cart_mass_scale", "measurement_delay", "actuator_delay", "dropout", "actuator_tau",
+             "delay", "delay_kind", "plant")
+#: Scenario fields of the sensing-and-actuation study (also grid keys).
+SENSING_KEYS = ("measurement_delay", "actuator_delay", "dropout", "actuator_tau")
+DELAY_KINDS = ("measurement", "actuator")
 SCENARIO_KEYS = ("control_period", "duration", "x0", "x0_std", "estimate0", "theta_max",
-                 "settle_band", "cost_Q", "cost_R", "plant")
+                 "settle_band", "cost_Q", "cost_R", *SENSING_KEYS, "randomize", "plant")
 NOISE_KEYS = tuple(f.name for f in dataclasses.fields(NoiseModel))
 DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
 MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))
@@ -247,8 +257,16 @@ def _grid_point(values: dict[str, object], base: dict[str, dict[str, object]],
             tables["design"][key] = value
         elif key == "noise_scale":
             tables["noise"]["scale"] = value
-        elif key in ("control_period", "duration", "estimate0", "plant"):
+        elif key in ("control_period", "duration", "estimate0", "plant", *SENSING_KEYS):
             tables["scenario"][key] = value
+        elif key == "delay_kind":
+            continue                                     # with ``delay`` below
+        elif key == "delay":
+            kind = values["delay_kind"]
+            if kind not in DELAY_KINDS:
+                raise ConfigError(f"grid.delay_kind: expected 'measurement' or 'actuator', got "
+                                  f"{kind!r}")
+            tables["scenario"][f"{kind}_delay"] = value
         elif key == "theta0":
             x0 = list(tables["scenario"].get("x0", (0.0, 0.1, 0.0, 0.0)))  # type: ignore[arg-type]
             x0[1] = value
@@ -307,6 +325,9 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment",
         if bad:
             known = CONTROLLERS if key == "controller" else OBSERVERS
             raise ConfigError(f"grid.{key}: unknown {bad[0]!r}; expected one of " + ", ".join(known))
+    if ("delay" in grid) != ("delay_kind" in grid):  # type: ignore[operator]
+        raise ConfigError("grid.delay: give delay and delay_kind together (delay_kind = "
+                          "['measurement', 'actuator'] says which delay the values set)")
     study = data.get("study")
     study_params: dict[str, object] = {}
     if study is not None:

@@ -220,3 +220,45 @@ class NoiseStream:
     def forces(self, w: np.ndarray) -> np.ndarray:
         """Generalised forces (len, k, 2) of a force-noise draw, one per physics step."""
         return w.reshape(-1, self.k, 2)
+
+
+class UniformStream:
+    """Per-episode uniforms in [0, 1), one per control period, in blocks of :data:`CHUNK_PERIODS`.
+
+    The random sample losses (``Scenario.dropout``) are drawn here, from each episode's *child*
+    generator (see :func:`pendulum_lqg.sim.child_generator`), so the episode's noise stream is the
+    same with and without dropouts. Like :class:`NoiseStream`, each row keeps its own position, so
+    rows may restart at different periods (vector envs) and a row's draws do not depend on the batch.
+    """
+
+    def __init__(self) -> None:
+        self._gens: list[np.random.Generator] = []
+        self._block = np.zeros((0, CHUNK_PERIODS))
+        self._pos = np.zeros(0, dtype=np.int64)
+
+    def reset(self, generators: list[np.random.Generator], rows: np.ndarray | None = None) -> None:
+        """Attach generators (all rows, or the given rows of an existing batch)."""
+        if rows is None:
+            self._gens = list(generators)
+            self._block = np.zeros((len(generators), CHUNK_PERIODS))
+            self._pos = np.full(len(generators), CHUNK_PERIODS, dtype=np.int64)
+            return
+        for r, g in zip(np.asarray(rows).tolist(), generators, strict=True):
+            self._gens[r] = g
+        self._pos[rows] = CHUNK_PERIODS
+
+    def draw(self, rows: np.ndarray | None = None) -> np.ndarray:
+        """The next period's uniform of each row (default: every row), shape (len,)."""
+        rows = np.arange(len(self._gens)) if rows is None else np.asarray(rows)
+        for r in rows[self._pos[rows] >= CHUNK_PERIODS].tolist():   # once per CHUNK_PERIODS
+            self._gens[r].random(out=self._block[r])
+            self._pos[r] = 0
+        pos = self._pos[rows]
+        self._pos[rows] += 1
+        return self._block[rows, pos]
+
+    def select(self, rows: np.ndarray) -> None:
+        """Keep only these rows."""
+        self._gens = [self._gens[r] for r in np.asarray(rows).tolist()]
+        self._block = self._block[rows]
+        self._pos = self._pos[rows]

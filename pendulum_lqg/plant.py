@@ -103,6 +103,85 @@ def _named_geom(spec: mujoco.MjSpec, name: str, why: str) -> mujoco.MjsGeom:
     return geom
 
 
+#: The parameters :class:`Randomization` can draw, in the order of their uniform draws.
+RANDOMIZABLE: tuple[str, ...] = ("pole_mass_scale", "pole_length_scale", "cart_mass_scale")
+
+
+@dataclass(frozen=True)
+class Randomization:
+    """Per-episode parameter randomisation of the simulated plant: ``[lo, hi]`` multipliers.
+
+    Each episode draws, from its own child generator, three uniforms ``r`` in the fixed order of
+    :data:`RANDOMIZABLE` (all three are always drawn, so adding a range does not change the others'
+    draws) and simulates the plant with ``scale = lo + (hi − lo)·r`` for every range given (×1 for
+    the others), on top of the scenario's own model overrides (a scale multiplies an override's
+    scale or absolute value).
+
+    Attributes
+    ----------
+    pole_mass_scale, pole_length_scale, cart_mass_scale : ``(lo, hi)`` with ``0 < lo ≤ hi``, or
+        ``None`` (not randomised)
+    """
+
+    pole_mass_scale: tuple[float, float] | None = None
+    pole_length_scale: tuple[float, float] | None = None
+    cart_mass_scale: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        for name in RANDOMIZABLE:
+            value = getattr(self, name)
+            if value is None:
+                continue
+            try:
+                lo, hi = (float(v) for v in value)
+            except (TypeError, ValueError):
+                raise ConfigError(f"randomize.{name}: expected [lo, hi], two numbers with "
+                                  f"0 < lo ≤ hi, got {value!r}") from None
+            if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo <= hi):
+                raise ConfigError(f"randomize.{name}: expected [lo, hi] with 0 < lo ≤ hi, got "
+                                  f"{value!r}")
+            object.__setattr__(self, name, (lo, hi))
+
+    @classmethod
+    def from_mapping(cls, data: object) -> Randomization:
+        """From a mapping such as the TOML ``randomize = {pole_mass_scale = [0.8, 1.2]}``."""
+        if isinstance(data, Randomization):
+            return data
+        if data is None:
+            return cls()
+        if not isinstance(data, dict):
+            raise ConfigError(f"randomize: expected a table of [lo, hi] ranges, got {data!r}")
+        unknown = sorted(set(data) - set(RANDOMIZABLE))
+        if unknown:
+            raise ConfigError(f"randomize: unknown key {unknown[0]!r}; known keys: "
+                              + ", ".join(RANDOMIZABLE))
+        return cls(**data)  # type: ignore[arg-type]
+
+    def is_empty(self) -> bool:
+        return all(getattr(self, name) is None for name in RANDOMIZABLE)
+
+    def scales(self, r: np.ndarray) -> dict[str, float]:
+        """The multipliers of one episode from its three uniforms ``r`` in [0, 1)."""
+        out = {}
+        for name, ri in zip(RANDOMIZABLE, r, strict=True):
+            rng = getattr(self, name)
+            out[name] = 1.0 if rng is None else rng[0] + (rng[1] - rng[0]) * float(ri)
+        return out
+
+    @staticmethod
+    def apply(base: ModelOverrides, scales: dict[str, float]) -> ModelOverrides:
+        """``base`` with each parameter multiplied by its scale (absolute values stay absolute)."""
+        changes: dict[str, float] = {}
+        for scale_name, s in scales.items():
+            name = scale_name.removesuffix("_scale")
+            if getattr(base, name) is not None:
+                changes[name] = getattr(base, name) * s
+            else:
+                prior = getattr(base, scale_name)
+                changes[scale_name] = s if prior is None else prior * s
+        return dataclasses.replace(base, **changes)
+
+
 def _apply_overrides(spec: mujoco.MjSpec, ov: ModelOverrides) -> None:
     if ov.pole_mass is not None or ov.pole_mass_scale is not None:
         pole = _named_geom(spec, POLE_GEOM, "pole_mass" if ov.pole_mass is not None

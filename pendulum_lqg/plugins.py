@@ -307,7 +307,7 @@ def build_policy(name: str | None, *, plant: Plant, scenario: Scenario,
     base_dir : folder that relative plugin file paths are taken from (an experiment file's folder)
     context : a prebuilt :class:`PolicyContext` (saves re-linearising for many plugins)
     """
-    from pendulum_lqg.policy import DesignSpec, design_policy
+    from pendulum_lqg.policy import DesignSpec, delay_periods, design_policy
 
     spec = spec or DesignSpec()
     if name is not None and is_plugin_ref(name):
@@ -323,7 +323,8 @@ def build_policy(name: str | None, *, plant: Plant, scenario: Scenario,
     if name is not None:
         controller, observer = split_builtin(name)
         spec = dataclasses.replace(spec, controller=controller, observer=observer)
-    return design_policy(plant, scenario.control_period, scenario.noise, spec)
+    return design_policy(plant, scenario.control_period, scenario.noise, spec,
+                         delays=delay_periods(scenario))
 
 
 def split_builtin(name: str) -> tuple[str, str]:

@@ -20,6 +20,10 @@ Observers
     observer (Re λ ≤ −``lmi_decay``) · ``h2`` continuous H₂ filter by LMI (= Kalman–Bucy) ·
     ``hinf`` continuous H∞ filter by LMI (minimal certified γ). The continuous designs run under
     sample-and-hold like ``kalman-bucy``: the observer ODE with y and u held, discretised exactly.
+    ``kalman-delay`` the steady-state filter of the state augmented with the scenario's
+    measurement and actuator delay lines (exact for whole periods), whose controller acts on the
+    state predicted over the actuator delay, ``u_n = −K x̂_{n+d_a|n}``
+    (:func:`~pendulum_lqg.design.augment_delays`). The other observers ignore delays.
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ from pendulum_lqg.design._checks import as_poles
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.estimators import (
     CurrentEstimator,
+    DelayKalman,
     Estimator,
     PredictorEstimator,
     ReducedOrderEstimator,
@@ -50,7 +55,7 @@ from pendulum_lqg.plant import Plant
 
 Controller = Literal["lqr", "dlqr"]
 Observer = Literal["none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy",
-                   "reduced-order", "ackermann", "lmi", "h2", "hinf"]
+                   "reduced-order", "ackermann", "lmi", "h2", "hinf", "kalman-delay"]
 
 
 @dataclass(frozen=True)
@@ -202,7 +207,7 @@ def per_sample_process_covariance(plant_lin: ContinuousModel, noise: NoiseModel,
 
 def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
                   spec: DesignSpec | None = None, *, linear: ContinuousModel | None = None,
-                  ) -> Policy:
+                  delays: tuple[int, int] = (0, 0)) -> Policy:
     """Design the policy ``spec`` for ``plant`` at ``control_period`` with the nominal noise.
 
     Parameters
@@ -212,6 +217,8 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
     noise : nominal noise model (its ``scale`` is ignored: designs use the nominal densities)
     spec : controller / observer choice and weights
     linear : a precomputed :func:`~pendulum_lqg.linearize.linearize` result (to save time)
+    delays : ``(measurement, actuator)`` delays in control periods that ``kalman-delay``
+        compensates (:func:`delay_periods` of the scenario; the other observers ignore them)
     """
     spec = spec or DesignSpec()
     steps_per_period(plant, control_period)
@@ -269,6 +276,13 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
             Phi, Gamma, C, np.exp(np.asarray(spec.reduced_order_poles, dtype=complex) * dt))
         est = ReducedOrderEstimator(ro, C)
         info["L"], info["observer_poles"] = ro.G, ro.poles
+    elif spec.observer == "kalman-delay":
+        aug = design.augment_delays(Phi, Gamma, C, measurement_delay=int(delays[0]),
+                                    actuator_delay=int(delays[1]))
+        kf = design.dkalman(aug.Phi, aug.G, aug.C, Qd_noise, V)
+        est = DelayKalman(aug.Phi, aug.Gamma, aug.C, kf.L, aug.predict, P=kf.P, M=kf.M)
+        info["L"], info["observer_poles"], info["P_kalman"] = kf.L, kf.poles, kf.P
+        info["delays"], info["predict"] = tuple(int(d) for d in delays), aug.predict
     else:  # continuous designs, emulated under sample-and-hold
         G, W = noise_design_matrices(lin, noise, dt)
         P_obs = None
@@ -284,12 +298,19 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
             L = res.L
             info["hinf_gamma"] = res.bound
         F, G_u, G_y = _emulated_observer(A, B, C, L, dt)
-        est = PredictorEstimator(F, G_u, G_y, C, gain=L, P=P_obs)
+        est = PredictorEstimator(F, G_u, G_y, C, gain=L, P=P_obs, Phi=Phi, Gamma=Gamma)
         info["L"], info["observer_poles"] = L, np.linalg.eigvals(F)
         info["observer_poles_continuous"] = np.linalg.eigvals(A - L @ C)
     info["noise_Qd"], info["noise_V"] = Qd_noise, V
     return Policy(K=ctrl.K, estimator=est, u_max=plant.u_max,
                   name=f"{spec.controller}+{spec.observer}", info=info)
+
+
+def delay_periods(scenario: object) -> tuple[int, int]:
+    """``(measurement, actuator)`` delays of a :class:`~pendulum_lqg.sim.Scenario` in periods —
+    what :func:`design_policy` takes as ``delays``."""
+    return (int(getattr(scenario, "measurement_delay_periods", 0)),
+            int(getattr(scenario, "actuator_delay_periods", 0)))
 
 
 def design_all(plant: Plant, control_period: float, noise: NoiseModel,

@@ -12,6 +12,9 @@ a grid over            success rate vs that variable with 95 % Wilson bands (one
 ``theta0``
 a mismatch grid        success and mean cost along pole mass and pole length (the other at ×1),
 (``pole_*_scale``)     and the success over the whole (mass, length) grid per policy
+a delay grid           success rate (95 % Wilson bands) and mean J vs the delay, one panel per
+(``delay`` +           kind of delay, one line per policy; the largest delay each policy
+``delay_kind``)        tolerates at ≥ 95 % success (:func:`tolerated_delays`)
 ``study = "margins"``  Nyquist plots of LQ vs LQG (and LTR) loops with the circle abs(1 + L) = 1;
                        LTR margins vs q; sampled-loop margins vs T
 ``study = "roa"``      (reads ``roa_map.csv``) noise-free recovery maps over (θ₀, θ̇₀); largest θ₀ per policy
@@ -102,6 +105,10 @@ def make_report(paths: list[Path], out: Path) -> Path:
             figs = _grid_figures(folder, out, name, src, plt)
         for title, fname in figs:
             sections += [f"### {title}", "", f"![{title}]({fname})", ""]
+        grid = src.get("grid", {})
+        if study is None and "delay" in grid and "delay_kind" in grid:
+            varying = [k for k in SERIES_KEYS if len(grid.get(k, [])) > 1] or ["config"]
+            sections += _delay_table(_read_rows(folder), varying)
         sections += ["<details><summary>table</summary>", "",
                      (folder / "summary.md").read_text(), "</details>", ""]
     from pendulum_lqg.results import atomic_write
@@ -197,6 +204,8 @@ def _grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: 
     figs: list[tuple[str, str]] = []
     if {"pole_mass_scale", "pole_length_scale"} <= set(sweeps):
         return _mismatch_figures(rows, out, name, series, plt)
+    if "delay" in grid and "delay_kind" in grid:
+        return _delay_figures(rows, out, name, series, plt)
     if not sweeps:
         figs.append(("cost distributions", _cost_boxes(rows, out, name, series, None, plt)))
         return figs
@@ -272,6 +281,80 @@ def _grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: 
     figs.append(("cost distributions", _cost_boxes(rows, out, name, series + facets,
                                                    (x, nominal), plt)))
     return figs
+
+
+#: The success rate a policy must reach to "tolerate" a delay.
+TOLERANCE_LEVEL = 0.95
+
+
+def tolerated_delays(rows: list[dict[str, object]], series: list[str], *,
+                     level: float = TOLERANCE_LEVEL) -> list[dict[str, object]]:
+    """The largest delay each policy tolerates, per kind of delay: the largest grid value ``d``
+    with a success rate ≥ ``level`` at ``d`` and at every smaller delay of the grid (``nan`` if
+    not even the smallest), with the success and its 95 % Wilson interval there."""
+    out = []
+    for (kind, *key), grp in sorted(_group(rows, ["delay_kind", *series]).items()):
+        xs, rate, lo, hi = _success_curve(grp, "delay")
+        ok = np.cumprod(rate >= level - 1e-12).astype(bool)
+        i = int(np.nonzero(ok)[0][-1]) if ok.any() else None
+        out.append({"policy": " ".join(map(str, key)), "delay_kind": kind,
+                    "tolerated_delay": float(xs[i]) if i is not None else float("nan"),
+                    "success": float(rate[i]) if i is not None else float("nan"),
+                    "ci95": [float(lo[i]), float(hi[i])] if i is not None else [],
+                    "next_delay": float(xs[i + 1]) if i is not None and i + 1 < xs.size
+                    else float("nan"),
+                    "next_success": float(rate[i + 1]) if i is not None and i + 1 < xs.size
+                    else float("nan")})
+    return out
+
+
+def _delay_figures(rows: list[dict[str, object]], out: Path, name: str, series: list[str],
+                   plt: Any) -> list[tuple[str, str]]:
+    """Success (Wilson bands) and mean J vs delay, a column per kind of delay."""
+    kinds = sorted({str(r["delay_kind"]) for r in rows}, reverse=True)   # measurement first
+    fig, axes = plt.subplots(2, len(kinds), figsize=(5.4 * len(kinds), 6.6), squeeze=False,
+                             sharex=True)
+    for col, kind in enumerate(kinds):
+        sub = [r for r in rows if r["delay_kind"] == kind]
+        for key, grp in sorted(_group(sub, series).items()):
+            xs, rate, lo, hi = _success_curve(grp, "delay")
+            label = " ".join(map(str, key))
+            line, = axes[0][col].plot(1e3 * xs, rate, marker="o", ms=3, label=label)
+            axes[0][col].fill_between(1e3 * xs, lo, hi, color=line.get_color(), alpha=0.12, lw=0)
+            xs, m, se = _metric_curve(grp, "delay", "cost", successes_only=True)
+            axes[1][col].errorbar(1e3 * xs, m, yerr=se, marker="o", ms=3, capsize=2,
+                                  color=line.get_color(), label=label)
+        axes[0][col].axhline(TOLERANCE_LEVEL, color="k", ls=":", lw=0.8)
+        axes[0][col].set_ylim(-0.03, 1.03)
+        axes[0][col].set_title(f"{kind} delay")
+        axes[1][col].set_yscale("log")
+        axes[1][col].set_xlabel(f"{kind} delay [ms]")
+    axes[0][0].set_ylabel("success rate (95 % Wilson band)")
+    axes[1][0].set_ylabel("mean J of successful episodes (± SE)")
+    axes[0][-1].legend(loc="lower left")
+    fig.suptitle(f"{name}: success and cost vs delay (dotted: {TOLERANCE_LEVEL:.0%})")
+    figs = [("success and cost vs delay", _save(fig, out, f"{name}_success_vs_delay.png", plt))]
+    figs.append(("cost distributions", _cost_boxes(rows, out, name, series, ("delay", 0.0), plt)))
+    return figs
+
+
+def _delay_table(rows: list[dict[str, object]], series: list[str]) -> list[str]:
+    """Markdown table of :func:`tolerated_delays`."""
+    lines = [f"Largest delay tolerated at ≥ {TOLERANCE_LEVEL:.0%} success (at that delay and every "
+             "smaller one of the grid; 95 % Wilson interval):", "",
+             "| policy | delay | largest delay [ms] | success there | next delay: success |",
+             "|---|---|---|---|---|"]
+    for t in tolerated_delays(rows, series):
+        d = t["tolerated_delay"]
+        if d != d:
+            lines.append(f"| {t['policy']} | {t['delay_kind']} | none | – | – |")
+            continue
+        lo, hi = t["ci95"]  # type: ignore[misc]
+        nxt = ("–" if t["next_delay"] != t["next_delay"]
+               else f"{1e3 * float(t['next_delay']):.0f} ms: {float(t['next_success']):.1%}")  # type: ignore[arg-type]
+        lines.append(f"| {t['policy']} | {t['delay_kind']} | {1e3 * float(d):.0f} | "  # type: ignore[arg-type]
+                     f"{float(t['success']):.1%} [{lo:.1%}, {hi:.1%}] | {nxt} |")  # type: ignore[arg-type]
+    return [*lines, ""]
 
 
 def _cost_boxes(rows: list[dict[str, object]], out: Path, name: str, series: list[str],

@@ -15,6 +15,14 @@ One control period ``n`` (``T = k·h``) for each running episode:
 6. failure detection at every physics step and metrics streamed into per-episode accumulators
    (:class:`~pendulum_lqg.metrics.MetricsAccumulator`); trajectories are kept only on request.
 
+Realistic sensing and actuation (``Scenario`` fields, all off by default and then bit-identical to
+the plain loop): a measurement delay line and random sample losses (nan rows) in step 2, an
+actuator delay line and a first-order force lag (a force per physics step) in steps 3–4, and
+per-episode randomised models (``mujoco.rollout`` takes one model per row). Delay lines are ring
+buffers of shape (n, d, ·) indexed by each row's own period, emptied when a row (re)starts. The
+metrics' ``u`` (RMS, max, saturation) is the command reaching the actuator (after the delay); J
+integrates the force actually applied (after the lag).
+
 Failure rule (documented in the README): ``|θ| > theta_max`` (default 0.5 rad), or the cart reaching
 the end of the track ``|p| ≥ track_limit`` (the slider ``range`` in the XML), or a non-finite / runaway
 state (``|x_i| > 10⁶`` or MuJoCo resetting the data after an instability), reason ``diverged``.
@@ -43,8 +51,8 @@ from pendulum_lqg.metrics import (
     period_integrals,
 )
 from pendulum_lqg.names import PLANTS
-from pendulum_lqg.noise import NoiseModel, NoiseStream
-from pendulum_lqg.plant import ModelOverrides, Plant
+from pendulum_lqg.noise import NoiseModel, NoiseStream, UniformStream
+from pendulum_lqg.plant import ModelOverrides, Plant, Randomization, load_plant
 
 #: Any state component beyond this magnitude counts as divergence.
 RUNAWAY = 1e6
@@ -71,6 +79,19 @@ class Scenario:
         linearisation about the upright: ``"linear-zoh"`` (exact discretisation) or
         ``"linear-euler"`` (the lecture's own ``x ← x + T·(A x + B u) + δx`` per control period);
         same noise streams, failure rule, metrics and policies
+    measurement_delay : age of the measurement the policy receives [s], a whole number of control
+        periods ``d``: at sample n it gets the sample taken at n − d (NaN for n < d, when no
+        sample has arrived yet)
+    actuator_delay : delay of the force [s], a whole number of control periods ``d``: the force
+        requested at sample n acts over period n + d (0 N over the first d periods)
+    dropout : probability that a measurement sample is lost; the policy then receives
+        ``[nan, nan]`` for it (the built-in estimators run their prediction only)
+    actuator_tau : time constant of a first-order lag of the force [s] (0: none), at the physics
+        rate: over physics step j the actuator applies the lag's exact response at the end of
+        that step, ``f_j = u + (f_{j−1} − u)·e^{−h/τ}``
+    randomize : per-episode parameter randomisation of the simulated plant
+        (:class:`~pendulum_lqg.plant.Randomization`; a mapping such as
+        ``{"pole_mass_scale": (0.8, 1.2)}`` is accepted)
     """
 
     control_period: float = 0.01
@@ -85,6 +106,11 @@ class Scenario:
     cost_R: float = 1.0
     overrides: ModelOverrides = field(default_factory=ModelOverrides)
     plant: str = "mujoco"
+    measurement_delay: float = 0.0
+    actuator_delay: float = 0.0
+    dropout: float = 0.0
+    actuator_tau: float = 0.0
+    randomize: Randomization = field(default_factory=Randomization)
 
     def __post_init__(self) -> None:
         for name in ("control_period", "duration", "theta_max", "settle_band", "cost_R"):
@@ -102,11 +128,42 @@ class Scenario:
             raise ConfigError("noise: expected a NoiseModel")
         if not isinstance(self.overrides, ModelOverrides):
             raise ConfigError("overrides: expected a ModelOverrides")
+        self._check_sensing_and_actuation()
         if self.plant not in PLANTS:
             raise ConfigError(f"plant: expected one of {', '.join(PLANTS)}, got {self.plant!r}")
         if self.plant != "mujoco" and self.noise.process == "force":
             raise ConfigError(f"plant: {self.plant!r} takes process noise on the state (the "
                               "lecture model); force noise needs plant = 'mujoco'")
+        if self.plant != "mujoco" and self.actuator_tau > 0:
+            raise ConfigError(f"actuator_tau: the lag acts at the physics rate, which the plant "
+                              f"{self.plant!r} does not have; use plant = 'mujoco'")
+
+    def _check_sensing_and_actuation(self) -> None:
+        """Validate the delay, dropout, lag and randomisation fields (all off by default)."""
+        for name in ("measurement_delay", "actuator_delay", "dropout", "actuator_tau"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) \
+                    or not np.isfinite(value) or value < 0:
+                raise ConfigError(f"{name}: expected a finite number ≥ 0, got {value!r}")
+            object.__setattr__(self, name, float(value))
+        for name in ("measurement_delay", "actuator_delay"):
+            periods = getattr(self, name) / self.control_period
+            if abs(periods - round(periods)) > 1e-9 * max(1.0, periods):
+                raise ConfigError(f"{name}: expected a whole number of control periods "
+                                  f"(T = {self.control_period:g} s), got {getattr(self, name)!r} s")
+        if self.dropout >= 1:
+            raise ConfigError(f"dropout: expected a probability in [0, 1), got {self.dropout!r}")
+        object.__setattr__(self, "randomize", Randomization.from_mapping(self.randomize))
+
+    @property
+    def measurement_delay_periods(self) -> int:
+        """The measurement delay in control periods."""
+        return round(self.measurement_delay / self.control_period)
+
+    @property
+    def actuator_delay_periods(self) -> int:
+        """The actuator delay in control periods."""
+        return round(self.actuator_delay / self.control_period)
 
     @property
     def n_periods(self) -> int:
@@ -118,6 +175,7 @@ class Scenario:
     def to_dict(self) -> dict[str, object]:
         d = dataclasses.asdict(self)
         d["overrides"] = {k: v for k, v in d["overrides"].items() if v is not None}
+        d["randomize"] = {k: list(v) for k, v in d["randomize"].items() if v is not None}
         return d
 
 
@@ -135,6 +193,25 @@ def episode_seed(seed: int, episode: int) -> int:
     return int(seq.generate_state(1, dtype=np.uint32)[0])
 
 
+def child_generator(generator: np.random.Generator) -> np.random.Generator:
+    """The episode's child stream: ``generator.spawn(1)[0]``.
+
+    Drawn from only when a scenario randomises parameters or drops samples, so the episode's own
+    generator — the initial state, then the noise blocks — draws exactly what it draws without
+    those features. The child is made at the episode's reset and draws, in order: the three
+    uniforms of :class:`~pendulum_lqg.plant.Randomization` (if any range is given), then one
+    uniform per control period for the dropouts (if ``dropout > 0``), in blocks. Spawning does not
+    advance the parent; it depends only on the parent's seed sequence and on how many children it
+    spawned before, so ``default_rng(s)`` and ``gymnasium``'s ``reset(seed=s)`` give the same child.
+    """
+    try:
+        return generator.spawn(1)[0]
+    except (AttributeError, TypeError, ValueError) as exc:
+        raise ConfigError("generators: randomize/dropout need generators made from a seed "
+                          "(numpy.random.default_rng(seed)), which can spawn a child stream"
+                          ) from exc
+
+
 @dataclass
 class StepResult:
     """What one control period returns for the running rows.
@@ -146,6 +223,8 @@ class StepResult:
     failed : (n,) bool, the episode ended in this period
     reason : (n,) int failure codes (``metrics.FAIL_*``)
     states : (n, k, 4) physics-rate states over the period (always available; cheap views)
+    forces : (n, k) the force applied over each physics step (after saturation, actuator delay
+        and lag; a view, valid until the next step)
     """
 
     x: np.ndarray
@@ -153,6 +232,7 @@ class StepResult:
     failed: np.ndarray
     reason: np.ndarray
     states: np.ndarray
+    forces: np.ndarray | None = None
 
 
 class Simulator:
@@ -218,6 +298,21 @@ class Simulator:
         self._capacity = 0
         self._streamed = bool(streamed_metrics)
         self.metrics: MetricsAccumulator | None = None
+        self._init_sensing_and_actuation()
+
+    def _init_sensing_and_actuation(self) -> None:
+        """Delay lines, dropouts, actuator lag and randomised models (all off by default)."""
+        sc = self.scenario
+        self._dm, self._da = sc.measurement_delay_periods, sc.actuator_delay_periods
+        self._dropout = sc.dropout
+        self._randomized = not sc.randomize.is_empty()
+        self._drops = UniformStream() if self._dropout > 0 else None
+        #: e^{−(j+1)h/τ}, j = 0 … k−1: the lag's decay over the physics steps of a period
+        self._lag_decay = (np.exp(-np.arange(1, self.k + 1) * self.h / sc.actuator_tau)
+                           if sc.actuator_tau > 0 else None)
+        self._plain_sensing = not (self._dm or self._drops is not None)
+        self._plain_actuation = not (self._da or self._lag_decay is not None)
+        self._row_models: list[mujoco.MjModel] | None = None
 
     # ---- lifecycle ---------------------------------------------------------------------------
     def close(self) -> None:
@@ -308,6 +403,7 @@ class Simulator:
             self.noise.reset(generators, rows)
             if self.metrics is not None:
                 self.metrics.restart(self.ids[rows])
+        self._reset_sensing_and_actuation(generators, rows)
         if self.metrics is not None:
             self.metrics.start(self.ids if rows is None else self.ids[rows], x0)
         return x0.copy()
@@ -330,12 +426,14 @@ class Simulator:
         """
         if rows is None:
             self._w, v = self.noise.draw()
-            return self.x[:, :2] + v
+            y = self.x[:, :2] + v
+            return y if self._plain_sensing else self._sense(y, None)
         rows = np.asarray(rows)
         w, v = self.noise.draw(rows)
         self._w = self._w.copy()             # it may be a view of the noise block
         self._w[rows] = w
-        return self.x[rows, :2] + v
+        y = self.x[rows, :2] + v
+        return y if self._plain_sensing else self._sense(y, rows)
 
     def noise_free_measurement(self) -> np.ndarray:
         return self.x[:, :2].copy()
@@ -360,17 +458,21 @@ class Simulator:
             u = np.where(bad_u, 0.0, u)
         # saturation (np.minimum/np.maximum: np.clip's values, at a fraction of its overhead)
         u = np.minimum(np.maximum(u, -self.u_max), self.u_max)
+        u_steps = None
+        if not self._plain_actuation:        # delay line and/or lag: u becomes the applied force
+            u, u_steps = self._actuate(u)
         buf = self._period_buf[:n]
         buf[:, 0, :4] = self.x
-        buf[:, :k, 4] = u[:, None]
+        buf[:, :k, 4] = u[:, None] if u_steps is None else u_steps
         states = buf[:, 1:k + 1, :4]
         forces = self.noise.forces(self._w) if self._force_noise else None
+        held = u if u_steps is None else u_steps
         if self._linear is not None:
             reset_flag = self._linear.advance(self.x, u, states)
         elif self.backend == "rollout":
-            reset_flag = self._advance_rollout(u, forces, states)
+            reset_flag = self._advance_rollout(held, forces, states)
         else:
-            reset_flag = self._advance_step(u, forces, states)
+            reset_flag = self._advance_step(held, forces, states)
         # state noise: one jump per period at its end (x ← x + δx)
         if self._state_noise:
             np.add(buf[:, k, :4], self._w, out=buf[:, k + 1, :4])
@@ -391,7 +493,8 @@ class Simulator:
         self.t = self.t + self.dt
         self.period = self.period + 1
         self.x = buf[:, k + 1, :4].copy()
-        return StepResult(x=self.x, cost=cost, failed=failed, reason=reason, states=states)
+        return StepResult(x=self.x, cost=cost, failed=failed, reason=reason, states=states,
+                          forces=buf[:, :k, 4])
 
     def park(self, rows: np.ndarray) -> None:
         """Put rows whose episode ended, and that wait for a reset, at rest upright (x = 0, no
@@ -407,6 +510,74 @@ class Simulator:
         self.ids = self.ids[rows]
         self._w = self._w[rows]
         self.noise.select(rows)
+        self._select_sensing_and_actuation(rows)
+
+    # ---- delays, dropouts, actuator lag, randomised models (per-row state, batched) ----------
+    def _reset_sensing_and_actuation(self, generators: list[np.random.Generator],
+                                     rows: np.ndarray | None) -> None:
+        """Empty the delay lines and the lag of the (re)started rows; draw their parameters."""
+        if self._plain_sensing and self._plain_actuation and not self._randomized:
+            return
+        if rows is None:
+            n = len(generators)
+            self._y_ring = np.full((n, self._dm, 2), np.nan)     # nothing has arrived yet
+            self._u_ring = np.zeros((n, self._da))                # 0 N until the first force
+            self._force = np.zeros(n)                             # the lag's output
+        else:
+            self._y_ring[rows] = np.nan
+            self._u_ring[rows] = 0.0
+            self._force[rows] = 0.0
+        if not (self._randomized or self._drops is not None):
+            return
+        children = [child_generator(g) for g in generators]
+        if self._randomized:                                      # the child's first draws
+            models = [self._episode_model(c.random(3)) for c in children]
+            if rows is None:
+                self._row_models = models
+            else:
+                assert self._row_models is not None
+                for r, m in zip(np.asarray(rows).tolist(), models, strict=True):
+                    self._row_models[r] = m
+        if self._drops is not None:
+            self._drops.reset(children, rows)
+
+    def _episode_model(self, r: np.ndarray) -> mujoco.MjModel:
+        """The simulated model of an episode with randomisation uniforms ``r`` (3,)."""
+        ov = Randomization.apply(self.plant.overrides, self.scenario.randomize.scales(r))
+        return load_plant(self.plant.path, overrides=ov).model
+
+    def _sense(self, y: np.ndarray, rows: np.ndarray | None) -> np.ndarray:
+        """Dropouts (lost samples become nan) and the measurement delay line of ``rows``."""
+        idx = np.arange(self.n) if rows is None else rows
+        if self._drops is not None:
+            y[self._drops.draw(rows) < self._dropout] = np.nan
+        if self._dm:
+            slot = self.period[idx] % self._dm          # holds the sample taken d periods ago
+            y, self._y_ring[idx, slot] = self._y_ring[idx, slot], y
+        return y
+
+    def _actuate(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """The actuator delay line and lag: ``(applied command (n,), force per physics step
+        (n, k) with a lag, else None)`` for the requested (saturated) forces ``u``."""
+        if self._da:
+            idx = np.arange(self.n)
+            slot = self.period % self._da                # holds the force requested d periods ago
+            u, self._u_ring[idx, slot] = self._u_ring[idx, slot], u
+        if self._lag_decay is None:
+            return u, None
+        steps = u[:, None] + (self._force - u)[:, None] * self._lag_decay
+        self._force = steps[:, -1].copy()
+        return u, steps
+
+    def _select_sensing_and_actuation(self, rows: np.ndarray) -> None:
+        if self._plain_sensing and self._plain_actuation and not self._randomized:
+            return
+        self._y_ring, self._u_ring = self._y_ring[rows], self._u_ring[rows]
+        self._force = self._force[rows]
+        if self._row_models is not None:
+            self._row_models = [self._row_models[r] for r in np.asarray(rows).tolist()]
+        if self._drops is not None:
+            self._drops.select(rows)
 
     # ---- physics -----------------------------------------------------------------------------
     def _advance_rollout(self, u: np.ndarray, forces: np.ndarray | None, out: np.ndarray,
@@ -419,12 +590,14 @@ class Simulator:
         init = self._init_buf[:n]
         init[:, self._state_slice] = self.x
         ctrl = self._ctrl_buf[:n]
-        ctrl[:, :, 0] = u[:, None]
+        ctrl[:, :, 0] = u[:, None] if u.ndim == 1 else u     # held, or per physics step (lag)
         if forces is not None:
             ctrl[:, :, 1:][:, :, self.plant.qvel_index] = forces
         state_out = self._state_out[:n]
         chunk = rollout_chunk(n, self._nthread, self.k)
-        self._rollout.rollout(self._models if n == self._capacity else self._models[:n],
+        models = self._row_models if self._row_models is not None else (
+            self._models if n == self._capacity else self._models[:n])
+        self._rollout.rollout(models,
                               self._datas, init, ctrl, control_spec=self._control_spec,
                               skip_checks=True, nstep=self.k, state=state_out, chunk_size=chunk)
         out[...] = state_out[:, :, self._state_slice]
@@ -438,12 +611,17 @@ class Simulator:
         m, d = self.model, self._data
         reset_flag = np.zeros(self.n, dtype=bool)
         qi, vi = self.plant.qpos_index, self.plant.qvel_index
+        per_step = u.ndim == 2                             # actuator lag: a force per step
         for r in range(self.n):
+            if self._row_models is not None:
+                m = self._row_models[r]
             mujoco.mj_resetData(m, d)
             d.qpos[qi] = self.x[r, :2]
             d.qvel[vi] = self.x[r, 2:]
-            d.ctrl[0] = u[r]
+            d.ctrl[0] = u[r, 0] if per_step else u[r]
             for j in range(self.k):
+                if per_step:
+                    d.ctrl[0] = u[r, j]
                 if forces is not None:
                     d.qfrc_applied[vi] = forces[r, j]
                 mujoco.mj_step(m, d)

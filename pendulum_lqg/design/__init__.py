@@ -14,9 +14,11 @@ module                 contents
 ``structure``          controllability / observability ranks and PBH tests
 ``discretize``         :func:`zoh`, :func:`euler`, :func:`process_noise_covariance`,
                        :func:`sampled_cost`
+``delay``              :func:`augment_delays`: integer-period measurement / actuator delay lines
 =====================  =====================================================================
 """
 
+from pendulum_lqg.design.delay import DelayAugmented, augment_delays
 from pendulum_lqg.design.discretize import (
     c2d_poles,
     euler,
@@ -67,6 +69,7 @@ from pendulum_lqg.design.structure import (
 __all__ = [
     "DEFAULT_OBSERVER_POLES",
     "DKalmanResult",
+    "DelayAugmented",
     "FiniteHorizonLQR",
     "KalmanResult",
     "LMIObserverResult",
@@ -77,6 +80,7 @@ __all__ = [
     "StructureReport",
     "TimeVaryingKalmanGains",
     "ackermann",
+    "augment_delays",
     "bryson",
     "c2d_poles",
     "controllability_matrix",
