@@ -278,7 +278,7 @@ class ReducedOrderEstimator(Estimator):
     def __init__(self, obs: object, C: np.ndarray) -> None:
         T = obs.T                                            # type: ignore[attr-defined]
         super().__init__(T.shape[0])
-        self.obs, self.C, self.gain = obs, C, obs.G          # type: ignore[attr-defined]
+        self.C, self.gain = C, obs.G                         # type: ignore[attr-defined]
         self.F, self.H_y, self.H_u = obs.F, obs.H_y, obs.H_u  # type: ignore[attr-defined]
         self.T, self.T_inv = T, obs.T_inv                    # type: ignore[attr-defined]
         self.P = None

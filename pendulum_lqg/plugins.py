@@ -36,7 +36,7 @@ import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -47,15 +47,6 @@ if TYPE_CHECKING:
     from pendulum_lqg.plant import Plant
     from pendulum_lqg.policy import DesignSpec
     from pendulum_lqg.sim import Scenario
-
-
-@runtime_checkable
-class BatchPolicy(Protocol):
-    """What the simulation core calls (``select``, ``needs_state`` and ``x_hat`` are optional)."""
-
-    def reset(self, n: int) -> None: ...
-
-    def act(self, y: np.ndarray) -> np.ndarray: ...
 
 
 @dataclass(frozen=True, eq=False)

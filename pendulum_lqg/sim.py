@@ -811,7 +811,6 @@ class _FixedBatch:
 
     def __init__(self, policy: object, n: int) -> None:
         self.policy, self.n0, self.alive = policy, n, np.arange(n)
-        self.name = getattr(policy, "name", type(policy).__name__)
 
     def act(self, y: np.ndarray) -> np.ndarray:
         if self.alive.size == self.n0:

@@ -2,8 +2,9 @@
 
 The Python API behind ``pendulum-lqg bench``::
 
+    from pendulum_lqg.executors import LocalExecutor
     from pendulum_lqg.experiments import load_spec
-    from pendulum_lqg.sweep import LocalExecutor, run_sweep
+    from pendulum_lqg.sweep import run_sweep
 
     result = run_sweep(load_spec("lecture"), "results/lecture", executor=LocalExecutor())
     result.summary["configurations"][0]["summary"]["success_rate"]
