@@ -17,12 +17,8 @@ Aggregates: success rate with its 95 % Wilson score interval; mean ± standard e
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from pendulum_lqg.sim import Simulator
 
 FAIL_NONE, FAIL_POLE, FAIL_TRACK, FAIL_DIVERGED = 0, 1, 2, 3
 FAIL_REASONS: dict[int, str] = {FAIL_NONE: "", FAIL_POLE: "pole_fell", FAIL_TRACK: "track_limit",
@@ -73,16 +69,28 @@ def period_integrals(z: np.ndarray, fail_step: np.ndarray | None, *, h: float,
 
 
 class MetricsAccumulator:
-    """Running sums per episode id; :meth:`rows` turns them into episode records."""
+    """Running sums per episode id; :meth:`rows` turns them into episode records.
+
+    Parameters
+    ----------
+    n : episode ids expected (``0 … n−1``; the arrays grow if a larger id starts)
+    h : physics step [s]; k : physics steps per control period
+    weights : (5,) ``h·[diag(Q), R]`` (see :func:`period_integrals`)
+    u_max : actuator limit [N] (the saturated-time metric)
+    settle_band : the ``|θ|`` band of the settling time [rad]
+
+    ``ids`` given to :meth:`accumulate` may be an integer array or a ``slice`` (the batch's rows
+    are episodes ``start … stop−1`` in order: in-place sums, no gather and scatter).
+    """
 
     _SUMS = ("alive", "cost", "theta2", "p2", "u2", "sat", "n_est", "settle",
              "max_theta", "max_p", "max_u", "fail_time")
 
-    def __init__(self, n: int, sim: Simulator) -> None:
-        self.h, self.k, self.dt = sim.h, sim.k, sim.dt
-        self.weights, self.u_max = sim.weights, sim.u_max
-        self.band = sim.scenario.settle_band
-        self.duration = sim.n_periods * sim.dt
+    def __init__(self, n: int, *, h: float, k: int, weights: np.ndarray, u_max: float,
+                 settle_band: float) -> None:
+        self.h, self.k = h, k
+        self.weights, self.u_max = weights, u_max
+        self.band = settle_band
         self._alloc(max(n, 1))
 
     def _alloc(self, n: int) -> None:
@@ -115,7 +123,7 @@ class MetricsAccumulator:
         self.reason[ids] = FAIL_NONE
         self.done[ids] = False
 
-    def accumulate(self, ids: np.ndarray, z: np.ndarray, u: np.ndarray,
+    def accumulate(self, ids: np.ndarray | slice, z: np.ndarray, u: np.ndarray,
                    x_hat: np.ndarray | None, failed: np.ndarray, reason: np.ndarray,
                    fail_step: np.ndarray | None, t: np.ndarray,
                    x_fail: np.ndarray | None = None) -> np.ndarray:
@@ -135,20 +143,26 @@ class MetricsAccumulator:
         self.u2[ids] += u * u * t_alive
         self.sat[ids] += (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive
         abs_theta = np.abs(theta)
-        self.max_theta[ids] = np.maximum(self.max_theta[ids], abs_theta.max(axis=1))
-        self.max_p[ids] = np.maximum(self.max_p[ids], np.abs(p).max(axis=1))
+        # a row's max can only grow if this period's largest value (over the batch: one flat
+        # reduction) exceeds the smallest running max — rarely, once the start has passed
+        for running, a in ((self.max_theta, abs_theta), (self.max_p, None)):
+            cur = running[ids]
+            if a is None:
+                a = np.abs(p)
+            if not a.max(initial=0.0) <= cur.min(initial=np.inf):     # nan: update
+                running[ids] = np.maximum(cur, a.max(axis=1))
         self.max_u[ids] = np.maximum(self.max_u[ids], np.abs(u))
         exceed = abs_theta > self.band
         if exceed.any():
             last = k - 1 - np.argmax(exceed[:, ::-1], axis=1)
             has = exceed.any(axis=1)
-            self.settle[ids[has]] = t[has] + (last[has] + 1) * h
+            self.settle[self._index(ids)[has]] = t[has] + (last[has] + 1) * h
         if x_hat is not None:
             err = x_hat - x_start
             self.est2[ids] += err * err
             self.n_est[ids] += 1
         if fail_step is not None:
-            f = ids[failed]
+            f = self._index(ids)[failed]
             if x_fail is not None:          # the crossing sample (nan of a diverged row ignored)
                 self.max_theta[f] = np.fmax(self.max_theta[f], np.abs(x_fail[failed, 1]))
                 self.max_p[f] = np.fmax(self.max_p[f], np.abs(x_fail[failed, 0]))
@@ -156,6 +170,10 @@ class MetricsAccumulator:
             self.reason[f] = reason[failed]
             self.done[f] = True
         return cost
+
+    @staticmethod
+    def _index(ids: np.ndarray | slice) -> np.ndarray:
+        return np.arange(ids.start, ids.stop) if isinstance(ids, slice) else ids
 
     def rows(self, ids: np.ndarray, seeds: np.ndarray | None = None) -> list[dict[str, object]]:
         """Episode records (``EPISODE_FIELDS``) for the given ids."""

@@ -9,6 +9,9 @@ policy is a *batched* object::
     policy.select(rows)      # optional: keep only these rows (episodes that ended are dropped)
     policy.needs_state       # optional, default False: True → act receives the true state (n, 4)
     policy.x_hat             # optional: the (n, 4) estimate used at this sample (metrics: RMS x̂−x)
+    policy.independent_rows  # optional, default False: True promises that each row evolves on its
+                             # own and the object deep-copies, so the core may split a large batch
+                             # into shards run in parallel, each with its own copy (same results)
 
 ``u`` is held over the control period and saturated by the core to the actuator range. A plugin is
 named ``MODULE:ATTR`` (an importable module) or ``path/to/file.py:ATTR``; ``ATTR`` is a factory
@@ -228,6 +231,8 @@ class PluginPolicy:
         self.info: dict[str, object] = dict(info) if isinstance(info, dict) else {}
         if callable(getattr(inner, "select", None)):
             self.select = self._select
+        #: the plugin's promise that its rows are independent (the core may shard the batch)
+        self.independent_rows = getattr(inner, "independent_rows", False) is True
         try:
             params = inspect.signature(inner.reset).parameters    # type: ignore[attr-defined]
         except (TypeError, ValueError):

@@ -29,7 +29,7 @@ Observers
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 from scipy.linalg import expm
@@ -138,8 +138,11 @@ class Policy:
         applied force
     name : "<controller>+<observer>"
     info : design data (gains, poles, matrices) for reports and recordings
+    independent_rows : always True — each row (episode) evolves on its own, so the core may run
+        a batch as shards, each with a copy of the policy (:func:`~pendulum_lqg.sim.shard_count`)
     """
 
+    independent_rows: ClassVar[bool] = True
     K: np.ndarray
     estimator: Estimator
     u_max: float

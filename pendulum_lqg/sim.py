@@ -31,8 +31,11 @@ A failed episode stops; the rest of the batch continues.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
+import threading
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -273,6 +276,7 @@ class Simulator:
         #: saturated force passes it; a nan one does not)
         self._inv_limits = 1.0 / np.array([self.track, scenario.theta_max, RUNAWAY, RUNAWAY,
                                            2.0 * self.u_max])
+        self._inv_limits_flat = np.tile(self._inv_limits, self.k + 1)
         nstate, qpos_cols, qvel_cols = plant.physics_state_layout
         self._nstate = nstate
         self._cols = np.concatenate([qpos_cols, qvel_cols])
@@ -313,6 +317,10 @@ class Simulator:
         self._plain_sensing = not (self._dm or self._drops is not None)
         self._plain_actuation = not (self._da or self._lag_decay is not None)
         self._row_models: list[mujoco.MjModel] | None = None
+        #: one row steps through :meth:`_step_single` (same physics call, failure rule and cost)
+        self._single_row_path = (self.backend == "rollout" and self._linear is None
+                                 and self._plain_sensing and self._plain_actuation
+                                 and not self._randomized)
 
     # ---- lifecycle ---------------------------------------------------------------------------
     def close(self) -> None:
@@ -391,7 +399,9 @@ class Simulator:
             self.period = np.zeros(n, dtype=np.int64)
             self.noise.reset(generators)
             if self._streamed:
-                self.metrics = MetricsAccumulator(self.ids.max(initial=-1) + 1, self)
+                self.metrics = MetricsAccumulator(
+                    self.ids.max(initial=-1) + 1, h=self.h, k=self.k, weights=self.weights,
+                    u_max=self.u_max, settle_band=sc.settle_band)
             self._w = np.zeros((n, self.noise.n_proc))
         else:
             rows = np.asarray(rows)
@@ -403,6 +413,7 @@ class Simulator:
             self.noise.reset(generators, rows)
             if self.metrics is not None:
                 self.metrics.restart(self.ids[rows])
+        self._id_index = _as_slice(self.ids)
         self._reset_sensing_and_actuation(generators, rows)
         if self.metrics is not None:
             self.metrics.start(self.ids if rows is None else self.ids[rows], x0)
@@ -451,6 +462,10 @@ class Simulator:
         n, k = self.n, self.k
         if u.shape[0] != n:
             raise ConfigError(f"u: expected {n} forces, got {u.shape[0]}")
+        if n == 1 and self._single_row_path:
+            u0 = float(u[0])
+            if math.isfinite(u0):
+                return self._step_single(min(max(u0, -self.u_max), self.u_max), x_hat)
         # a non-finite requested force (a policy that blew up) ends its episode as diverged at the
         # start of the period; the physics of that row runs with 0 N (one sum is the fast check)
         bad_u = None if math.isfinite(u.sum()) else ~np.isfinite(u)
@@ -483,18 +498,61 @@ class Simulator:
             failed = failed | bad_u
             reason = np.where(bad_u, FAIL_DIVERGED, reason).astype(np.int8)
             fail_step = np.where(bad_u, 0, k if fail_step is None else fail_step)
+        return self._finish_period(buf, u, x_hat, failed, reason, fail_step)
+
+    def _step_single(self, u: float, x_hat: np.ndarray | None) -> StepResult:
+        """:meth:`step` for one row (a single gymnasium env, a one-episode run): the same physics
+        call, failure rule and cost as the batch, without the batch's plumbing (per-row masks,
+        broadcasts and fancy indexing cost more than the arithmetic for one row). ``u`` is the
+        saturated, finite force."""
+        k = self.k
+        x = self.x[0]
+        init = self._init_buf[:1]
+        init[0, self._state_slice] = x
+        ctrl = self._ctrl_buf[:1]
+        ctrl[0, :, 0] = u
+        if self._force_noise:
+            ctrl[0, :, 1:][:, self.plant.qvel_index] = self.noise.forces(self._w)[0]
+        state_out = self._state_out[:1]
+        if self._rollout is None:
+            raise PendulumLQGError("simulator: closed (its rollout threads were released by "
+                                   "close()); make a new one")
+        self._rollout.rollout(self._models[:1], self._datas, init, ctrl,
+                              control_spec=self._control_spec, skip_checks=True, nstep=k,
+                              state=state_out, chunk_size=None)
+        buf = self._period_buf[:1]
+        b = buf[0]
+        b[0, :4] = x
+        b[1:k + 1, :4] = state_out[0, :, self._state_slice]
+        b[:k, 4] = u
+        if self._state_noise:
+            np.add(b[k, :4], self._w[0], out=b[k + 1, :4])
+        else:
+            b[k + 1, :4] = b[k, :4]
+        reset = bool(state_out[0, -1, self._time_col] < (k - 0.5) * self.h)
+        if not reset and self._within_limits(buf):
+            failed, reason, fail_step = np.zeros(1, dtype=bool), np.zeros(1, dtype=np.int8), None
+        else:
+            failed, reason, fail_step = self._detect_failure(buf, np.array([reset]))
+        return self._finish_period(buf, np.array([u]), x_hat, failed, reason, fail_step)
+
+    def _finish_period(self, buf: np.ndarray, u: np.ndarray, x_hat: np.ndarray | None,
+                       failed: np.ndarray, reason: np.ndarray, fail_step: np.ndarray | None,
+                       ) -> StepResult:
+        """Cost and metrics of the period in ``buf`` (n, k+2, 5); advance time and state."""
+        n, k = buf.shape[0], self.k
         z = buf[:, :k]
         if self.metrics is not None:
             x_fail = None if fail_step is None else buf[np.arange(n), fail_step + 1, :4]
-            cost = self.metrics.accumulate(self.ids, z, u, x_hat, failed, reason, fail_step,
+            cost = self.metrics.accumulate(self._id_index, z, u, x_hat, failed, reason, fail_step,
                                            self.t, x_fail)
         else:
             cost = period_integrals(z, fail_step, h=self.h, weights=self.weights)[2]
         self.t = self.t + self.dt
         self.period = self.period + 1
         self.x = buf[:, k + 1, :4].copy()
-        return StepResult(x=self.x, cost=cost, failed=failed, reason=reason, states=states,
-                          forces=buf[:, :k, 4])
+        return StepResult(x=self.x, cost=cost, failed=failed, reason=reason,
+                          states=buf[:, 1:k + 1, :4], forces=buf[:, :k, 4])
 
     def park(self, rows: np.ndarray) -> None:
         """Put rows whose episode ended, and that wait for a reset, at rest upright (x = 0, no
@@ -508,6 +566,7 @@ class Simulator:
         """Keep only these rows (drop finished episodes from the batch)."""
         self.x, self.t, self.period = self.x[rows], self.t[rows], self.period[rows]
         self.ids = self.ids[rows]
+        self._id_index = _as_slice(self.ids)
         self._w = self._w[rows]
         self.noise.select(rows)
         self._select_sensing_and_actuation(rows)
@@ -630,23 +689,26 @@ class Simulator:
             reset_flag[r] = abs(d.time - self.k * self.h) > 0.5 * self.h
         return reset_flag
 
+    def _within_limits(self, buf: np.ndarray) -> bool:
+        """The failure check's fast path, the common case: every ``|x_i| / limit_i`` of the
+        period's states (the end state too, a stricter test than its own) below ``1 − 1e-12``, so
+        the full checks of :meth:`_detect_failure` would find no failure (numpy's max keeps a
+        nan, and a nan fails the comparison)."""
+        n = buf.shape[0]
+        scaled = np.abs(buf[:, 1:], out=self._scratch[:n]).reshape(n, -1)
+        scaled *= self._inv_limits_flat      # (k+1)·5 wide: numpy's inner loop is not 5 long
+        return bool(scaled.max() < 1.0 - 1e-12)
+
     def _detect_failure(self, buf: np.ndarray, reset_flag: np.ndarray,
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """Failure of each row in the period ``buf`` (n, k+2, 5) = ``[x, u]`` at [the start | the
         k physics steps | the end]: ``failed``, the reason codes and the first failing physics
         step (``k`` if none), or ``None`` for the latter when no row failed."""
         sc = self.scenario
-        n, k = self.n, self.k
+        n, k = buf.shape[0], self.k
         failed = np.zeros(n, dtype=bool)
         reason = np.zeros(n, dtype=np.int8)                      # FAIL_NONE is 0
-        if n == 0:
-            return failed, reason, None
-        # fast path, the common case: every |x_i| / limit_i below 1 − 1e-12 (the end state too, a
-        # stricter test than its own), so the full checks below would find no failure (numpy's
-        # max keeps a nan, and a nan fails the comparison, so it takes the full path)
-        scaled = np.abs(buf[:, 1:], out=self._scratch[:n])
-        scaled *= self._inv_limits
-        if scaled.max() < 1.0 - 1e-12 and not np.count_nonzero(reset_flag):
+        if n == 0 or (self._within_limits(buf) and not reset_flag.any()):
             return failed, reason, None
         states, x_end = buf[:, 1:k + 1, :4], buf[:, k + 1, :4]
         with np.errstate(invalid="ignore"):
@@ -667,6 +729,15 @@ class Simulator:
                                    np.where(pole[idx, s], FAIL_POLE, FAIL_TRACK))
             return failed, reason, fail_step
         return failed, reason, None
+
+
+def _as_slice(ids: np.ndarray) -> np.ndarray | slice:
+    """``slice(a, a + n)`` if ``ids`` are the consecutive integers ``a … a+n−1``, else ``ids``
+    (the metrics then add in place instead of gathering and scattering)."""
+    n = ids.shape[0]
+    if n and int(ids[-1]) - int(ids[0]) == n - 1 and (n == 1 or bool((np.diff(ids) == 1).all())):
+        return slice(int(ids[0]), int(ids[0]) + n)
+    return ids
 
 
 class _LinearPlant:
@@ -712,11 +783,18 @@ MIN_CHUNK_STEPS = 300
 
 def rollout_chunk(n: int, nthread: int, nstep: int) -> int | None:
     """``chunk_size`` for a ``Rollout`` of ``n`` rows of ``nstep`` physics steps on ``nthread``
-    threads: ``mujoco.rollout``'s default of about ten chunks per thread (load balance), but no
-    chunk under :data:`MIN_CHUNK_STEPS` steps."""
+    threads: about ten chunks per thread (``mujoco.rollout``'s default, for load balance), but no
+    chunk under :data:`MIN_CHUNK_STEPS` steps, and a whole multiple of the thread count so no
+    thread is left with an extra chunk while the others wait (64 rows on 2 threads: 2 × 32, not
+    30 + 30 + 4). A batch too small to split runs as one chunk."""
     if nthread <= 1:
         return None
-    return max(-(-n // (10 * nthread)), -(-MIN_CHUNK_STEPS // nstep))
+    most = (n * nstep) // MIN_CHUNK_STEPS
+    if most < nthread:
+        return max(n, 1)
+    chunks = min(10 * nthread, most)
+    chunks -= chunks % nthread
+    return -(-n // chunks)
 
 
 def _cpu_count() -> int:
@@ -841,6 +919,30 @@ def _estimator_snapshot(policy: object, x_hat: np.ndarray | None, n: int,
             "P": np.broadcast_to(P if P is not None else np.full((4, 4), np.nan), (n, 4, 4))}
 
 
+#: Fewest episodes a shard of :func:`run_episodes` gets (smaller batches are run as one).
+MIN_SHARD_ROWS = 32
+
+
+def shard_count(n: int, nthread: int, backend: str, policy: object) -> int:
+    """How many independent shards :func:`run_episodes` splits ``n`` episodes into.
+
+    A batch on ``nthread ≥ 2`` rollout threads runs as ``nthread`` shards of about ``n / nthread``
+    episodes, each a :class:`Simulator` stepping its physics in its own Python thread
+    (``mujoco.rollout`` and numpy's larger operations release the GIL): the policy and metrics work
+    of one shard overlaps the physics of the others, where a single batch would leave the rollout
+    threads idle during it. Results do not change (episodes are independent and each draws from its
+    own generator). Only policies that declare ``independent_rows = True`` (every built-in; a plugin
+    may opt in) are split — each shard gets a deep copy — others run as one batch.
+    """
+    if backend != "rollout" or nthread < 2 or getattr(policy, "independent_rows", False) is not True:
+        return 1
+    return max(1, min(nthread, n // MIN_SHARD_ROWS))
+
+
+class _Cancelled(Exception):
+    """Another shard failed or the caller was interrupted: stop this one."""
+
+
 def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
                  episodes: list[int] | np.ndarray, backend: Literal["rollout", "step"] = "rollout",
                  nthread: int | None = None, trajectory: bool = False,
@@ -856,15 +958,45 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
     scenario : the control problem
     policy : any policy of the protocol in :mod:`pendulum_lqg.plugins` — ``reset(n)`` (or
         ``reset(n, x_hat0=…)`` when ``scenario.estimate0 == "true"``), ``act(y) -> u``, and
-        optionally ``select(rows)``, ``needs_state``, ``x_hat`` (for the estimation-error metrics)
-        and ``estimator`` (for recordings); built-in policies and plugins alike
+        optionally ``select(rows)``, ``needs_state``, ``x_hat`` (for the estimation-error metrics),
+        ``estimator`` (for recordings) and ``independent_rows`` (see :func:`shard_count`);
+        built-in policies and plugins alike
     seed : the run's seed; episodes : episode numbers to run
-    backend, nthread : see :class:`Simulator`
+    backend, nthread : see :class:`Simulator` (with ``nthread ≥ 2`` a large batch is split into
+        shards, :func:`shard_count`)
     trajectory : keep full trajectories (for recordings), not only the streamed metrics
     initial_states : optional (len(episodes), 4) initial states replacing the scenario's
         ``x0``/``x0_std`` draw (e.g. a region-of-attraction grid)
     """
     episodes = [int(e) for e in episodes]
+    nthread = nthread if nthread is not None else min(8, _cpu_count())
+    shards = shard_count(len(episodes), nthread, backend, policy)
+    if shards == 1:
+        return _run_batch(plant, scenario, policy, seed, episodes, backend, nthread, trajectory,
+                          initial_states, None)
+    parts = np.array_split(np.arange(len(episodes)), shards)
+    stop = threading.Event()
+    with ThreadPoolExecutor(max_workers=shards, thread_name_prefix="pendulum-lqg-shard") as pool:
+        futures = [pool.submit(_run_batch, plant, scenario, copy.deepcopy(policy), seed,
+                               [episodes[i] for i in part], backend, 1, trajectory,
+                               None if initial_states is None
+                               else np.asarray(initial_states)[part], stop)
+                   for part in parts]
+        try:
+            results = [f.result() for f in futures]
+        except BaseException:
+            stop.set()                      # the other shards end at their next control period
+            raise
+    rows = [r for res in results for r in res.rows]
+    trajectories = None if not trajectory else [
+        tr for res in results for tr in (res.trajectories or [])]
+    return BatchResult(rows=rows, trajectories=trajectories)
+
+
+def _run_batch(plant: Plant, scenario: Scenario, policy: object, seed: int, episodes: list[int],
+               backend: Literal["rollout", "step"], nthread: int, trajectory: bool,
+               initial_states: np.ndarray | None, stop: threading.Event | None) -> BatchResult:
+    """:func:`run_episodes` on one batch (one :class:`Simulator`)."""
     seeds = [episode_seed(seed, e) for e in episodes]
     gens = [np.random.default_rng(s) for s in seeds]
     n = len(episodes)
@@ -872,17 +1004,19 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
     with Simulator(plant, scenario, backend=backend, nthread=nthread) as sim:
         x0 = sim.reset(gens, initial_states=initial_states)
         if scenario.estimate0 == "true":
-            policy.reset(n, x_hat0=x0.copy())
+            policy.reset(n, x_hat0=x0.copy())   # type: ignore[attr-defined]
         else:
-            policy.reset(n)
+            policy.reset(n)                     # type: ignore[attr-defined]
         needs_state = bool(getattr(policy, "needs_state", False))
         can_select = callable(getattr(policy, "select", None))
         if not can_select:             # keep feeding the whole batch; use only the running rows
             policy = _FixedBatch(policy, n)
         for _ in range(sim.n_periods):
+            if stop is not None and stop.is_set():
+                raise _Cancelled
             y = sim.measure()
             x_now = sim.x
-            u = policy.act(x_now if needs_state else y)
+            u = policy.act(x_now if needs_state else y)   # type: ignore[attr-defined]
             x_hat = getattr(policy, "x_hat", None)
             if log is not None:
                 snap = dict(t=sim.t, x=x_now, y=y, u=np.clip(u, -sim.u_max, sim.u_max),
@@ -893,7 +1027,7 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
             if res.failed.any():
                 keep = np.nonzero(~res.failed)[0]
                 sim.select(keep)
-                policy.select(keep)
+                policy.select(keep)                       # type: ignore[attr-defined]
                 if keep.size == 0:
                     break
         assert sim.metrics is not None
@@ -905,4 +1039,3 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
         for tr, e in zip(trajectories, episodes, strict=True):
             tr.episode = e
     return BatchResult(rows=rows, trajectories=trajectories)
-

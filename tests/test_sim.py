@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -11,7 +12,15 @@ from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.metrics import summarize, wilson_interval
 from pendulum_lqg.noise import NoiseModel, NoiseStream
 from pendulum_lqg.policy import OBSERVERS, DesignSpec, design_policy
-from pendulum_lqg.sim import Scenario, Simulator, episode_seed, run_episodes
+from pendulum_lqg.sim import (
+    MIN_SHARD_ROWS,
+    Scenario,
+    Simulator,
+    episode_seed,
+    rollout_chunk,
+    run_episodes,
+    shard_count,
+)
 
 LECTURE = Scenario()
 
@@ -82,6 +91,37 @@ def test_batched_equals_single_episode_path(plant, observer):
     subset = run_episodes(plant, sc, policy(), seed=7, episodes=[5, 1], nthread=1).rows
     assert _dump(batch) == _dump(single)
     assert _dump([batch[5], batch[1]]) == _dump(subset)
+
+
+def test_sharded_batches_and_the_single_row_path_equal_one_batch(plant):
+    """A batch split into shards (threads), one batch on one thread, and each episode alone on
+    the single-row path give bit-identical rows and trajectories — failures included (the
+    noise is 5× the lecture's: about a third of the episodes fail)."""
+    sc = LECTURE.replace(duration=1.5, noise=dataclasses.replace(LECTURE.noise, scale=5.0))
+    pol = lambda: design_policy(plant, sc.control_period, sc.noise, DesignSpec("dlqr", "kalman"))  # noqa: E731
+    n = 2 * MIN_SHARD_ROWS + 3
+    assert shard_count(n, 2, "rollout", pol()) == 2
+    assert shard_count(n, 1, "rollout", pol()) == 1
+    sharded = run_episodes(plant, sc, pol(), seed=5, episodes=range(n), nthread=2,
+                           trajectory=True)
+    whole = run_episodes(plant, sc, pol(), seed=5, episodes=range(n), nthread=1, trajectory=True)
+    assert _dump(sharded.rows) == _dump(whole.rows)
+    assert 0 < sum(r["success"] for r in whole.rows) < n          # both outcomes are exercised
+    for a, b in zip(sharded.trajectories, whole.trajectories, strict=True):
+        assert a.episode == b.episode
+        assert np.array_equal(a.states, b.states) and np.array_equal(a.u, b.u)
+    failed = [e for e, r in enumerate(whole.rows) if not r["success"]][:2]
+    for e in [0, *failed]:
+        alone = run_episodes(plant, sc, pol(), seed=5, episodes=[e]).rows[0]   # single-row path
+        assert _dump([alone]) == _dump([whole.rows[e]])
+
+
+def test_rollout_chunks_are_a_multiple_of_the_threads():
+    assert rollout_chunk(64, 2, 10) == 32                 # not 30 + 30 + 4
+    assert rollout_chunk(1024, 2, 10) == 52               # 20 chunks, ten per thread
+    assert rollout_chunk(8, 2, 10) == 8                   # too small to split
+    assert rollout_chunk(100, 1, 10) is None
+    assert rollout_chunk(640, 4, 10) == 32                # 20 chunks: five per thread
 
 
 def test_force_noise_paths_agree_and_kalman_stabilises(plant):
