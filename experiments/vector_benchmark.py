@@ -3,17 +3,20 @@
 Both come from ``gymnasium.make_vec("pendulum_lqg/CartPoleLQG-v0", num_envs=N)``: the registered
 vector entry point (one batched ``mujoco.rollout`` per step) and ``vectorization_mode="sync"``
 (N single envs in a Python loop). Both run the same episodes (same seeds, NEXT_STEP autoreset)
-driven by the batched LQG agent; only ``step`` calls are timed. The three measurements below take
-turns, one timed run each per round, and each keeps its best run.
+driven by the batched LQG agent; only ``step`` calls are timed.
 
 The physics alone bounds what any vector env can reach: the third line times bare
-``mujoco.rollout`` calls of the same batch (N rows × k physics steps, the native env's threads and
-chunking, no Python around them). ``sync / physics`` is therefore the ceiling of the native/sync
-ratio on this machine; with ``c`` cores it grows about like ``c`` (the sync env uses one).
+``mujoco.rollout`` calls of the same batch, one per env step (N rows × k physics steps, the native
+env's threads and chunking, no state or sensor outputs requested, no Python around them) — a vector
+env must return to Python once per control period. ``native / bare physics`` is the share of that
+ceiling the native env reaches; ``physics / sync`` is the ceiling of the native/sync ratio on this
+machine (with ``c`` cores it grows about like ``c``: the sync env uses one). The three take turns,
+one timed run each per round; figures are medians over the rounds, ratios medians of the per-round
+ratios.
 
 Usage::
 
-    uv run python experiments/vector_benchmark.py [--num-envs 64] [--steps 300] [--repeats 3]
+    uv run python experiments/vector_benchmark.py [--num-envs 64] [--steps 300] [--repeats 5]
 """
 
 from __future__ import annotations
@@ -49,7 +52,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--num-envs", type=int, default=64)
     ap.add_argument("--steps", type=int, default=300, help="vector steps per timed run")
-    ap.add_argument("--repeats", type=int, default=3, help="rounds (one timed run each)")
+    ap.add_argument("--repeats", type=int, default=5, help="rounds (one timed run each)")
     args = ap.parse_args()
     n = args.num_envs
     native = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n)
@@ -67,17 +70,22 @@ def main() -> None:
         for name, envs in contenders.items():
             rates[name].append(n * args.steps / time_steps(envs, agent, args.steps, seed=r))
         rates["physics"].append(raw_rollout_rate(native.unwrapped.plant, n, k, nthread,
-                                                 calls=args.steps,
+                                                 calls=args.steps, outputs=False,
                                                  chunk_size=rollout_chunk(n, nthread, k)) / k)
-    best = {name: max(v) for name, v in rates.items()}
+        log = {name: f"{v[-1]:,.0f}" for name, v in rates.items()}
+        print(f"round {r + 1}/{args.repeats}: env steps/s {log}")
+    med = {name: float(np.median(v)) for name, v in rates.items()}
     for name, label in (("native", "native vector env"), ("sync", "SyncVectorEnv"),
-                        ("physics", "physics only (bare rollout)")):
-        print(f"{label:>28}: {best[name]:12,.0f} env steps/s ({best[name] * k:14,.0f} physics "
-              f"steps/s)")
-    print(f"{'ratio native / sync':>28}: {best['native'] / best['sync']:.1f}×")
-    print(f"{'ceiling physics / sync':>28}: {best['physics'] / best['sync']:.1f}×   (no vector env "
-          f"can exceed this here; native reaches {best['native'] / best['physics']:.0%} of the "
-          f"physics rate)")
+                        ("physics", "bare physics (rollout)")):
+        print(f"{label:>28}: {med[name]:12,.0f} env steps/s ({med[name] * k:14,.0f} physics "
+              f"steps/s; runs {min(rates[name]):,.0f}–{max(rates[name]):,.0f})")
+    to_physics = [a / b for a, b in zip(rates["native"], rates["physics"], strict=True)]
+    to_sync = [a / b for a, b in zip(rates["native"], rates["sync"], strict=True)]
+    ceiling = [a / b for a, b in zip(rates["physics"], rates["sync"], strict=True)]
+    print(f"{'native / bare physics':>28}: {np.median(to_physics):.3f}   (median of the "
+          f"{args.repeats} rounds, {min(to_physics):.3f}–{max(to_physics):.3f}; target ≥ 0.90)")
+    print(f"{'native / sync':>28}: {np.median(to_sync):.1f}×   (ceiling bare physics / sync "
+          f"{np.median(ceiling):.1f}×: no vector env can exceed it here)")
     native.close()
     sync.close()
 

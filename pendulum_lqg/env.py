@@ -187,8 +187,11 @@ class _Actions:
             u = self.lo + (u + 1.0) * (0.5 * (self.hi - self.lo))
         return u
 
-    def applied(self, u: np.ndarray) -> np.ndarray:
-        """The force the actuator applies (saturated), as the core applies it."""
+    def applied(self, u: np.ndarray | float) -> np.ndarray | float:
+        """The force the actuator applies (saturated), as the core applies it (a float for a
+        float: one row without numpy's per-call cost)."""
+        if isinstance(u, float):
+            return min(max(u, self.lo), self.hi)
         return np.minimum(np.maximum(u, self.lo), self.hi)
 
 
@@ -442,7 +445,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         else:
             obs = self._observe()
         truncated = int(sim.period[0]) >= sim.n_periods         # TimeLimit's rule
-        force = float(self._actions.applied(u)[0])
+        force = self._actions.applied(float(u[0]))
         return obs, reward, failed, truncated, self._info(cost, int(res.reason[0]), force)
 
     def _observe(self) -> np.ndarray:
