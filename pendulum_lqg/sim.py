@@ -337,10 +337,13 @@ class Simulator:
     def __getstate__(self) -> dict[str, object]:
         state = self.__dict__.copy()
         state["_rollout"] = None                 # a thread pool does not pickle
+        state.pop("_row0", None)                 # views: pickled, they would become copies
         return state
 
     def __setstate__(self, state: dict[str, object]) -> None:
         self.__dict__.update(state)
+        if self._capacity:
+            self._row0 = _RowViews(self, self.k)
         if self.backend == "rollout":
             self._rollout = mj_rollout.Rollout(nthread=self._nthread if self._nthread > 1 else 0)
 
@@ -362,6 +365,7 @@ class Simulator:
         # at the end (after state noise); u is held over steps 0 … k−1 and 0 after them
         self._period_buf = np.zeros((n, self.k + 2, 5))
         self._scratch = np.empty((n, self.k + 1, 5))     # |z| / limit of the failure check
+        self._row0 = _RowViews(self, self.k)
 
     # ---- episodes ----------------------------------------------------------------------------
     def reset(self, generators: list[np.random.Generator], *, ids: np.ndarray | None = None,
@@ -503,33 +507,29 @@ class Simulator:
     def _step_single(self, u: float, x_hat: np.ndarray | None) -> StepResult:
         """:meth:`step` for one row (a single gymnasium env, a one-episode run): the same physics
         call, failure rule and cost as the batch, without the batch's plumbing (per-row masks,
-        broadcasts and fancy indexing cost more than the arithmetic for one row). ``u`` is the
-        saturated, finite force."""
-        k = self.k
-        x = self.x[0]
-        init = self._init_buf[:1]
-        init[0, self._state_slice] = x
-        ctrl = self._ctrl_buf[:1]
-        ctrl[0, :, 0] = u
-        if self._force_noise:
-            ctrl[0, :, 1:][:, self.plant.qvel_index] = self.noise.forces(self._w)[0]
-        state_out = self._state_out[:1]
+        broadcasts and fancy indexing cost more than the arithmetic for one row; the views of row
+        0 are made once). ``u`` is the saturated, finite force."""
         if self._rollout is None:
             raise PendulumLQGError("simulator: closed (its rollout threads were released by "
                                    "close()); make a new one")
-        self._rollout.rollout(self._models[:1], self._datas, init, ctrl,
-                              control_spec=self._control_spec, skip_checks=True, nstep=k,
-                              state=state_out, chunk_size=None)
-        buf = self._period_buf[:1]
-        b = buf[0]
-        b[0, :4] = x
-        b[1:k + 1, :4] = state_out[0, :, self._state_slice]
-        b[:k, 4] = u
+        v = self._row0
+        x = self.x[0]
+        v.init_x[...] = x
+        v.ctrl_u[...] = u
+        if self._force_noise:
+            v.ctrl[0, :, v.force_cols] = self.noise.forces(self._w)[0].T
+        self._rollout.rollout(v.models, self._datas, v.init, v.ctrl,
+                              control_spec=self._control_spec, skip_checks=True, nstep=self.k,
+                              state=v.state_out, chunk_size=None)
+        v.start[...] = x
+        v.states[...] = v.out_states
+        v.u[...] = u
         if self._state_noise:
-            np.add(b[k, :4], self._w[0], out=b[k + 1, :4])
+            np.add(v.last, self._w[0], out=v.end)
         else:
-            b[k + 1, :4] = b[k, :4]
-        reset = bool(state_out[0, -1, self._time_col] < (k - 0.5) * self.h)
+            v.end[...] = v.last
+        reset = bool(v.out_time[-1] < (self.k - 0.5) * self.h)
+        buf = v.buf
         if not reset and self._within_limits(buf):
             failed, reason, fail_step = np.zeros(1, dtype=bool), np.zeros(1, dtype=np.int8), None
         else:
@@ -729,6 +729,23 @@ class Simulator:
                                    np.where(pole[idx, s], FAIL_POLE, FAIL_TRACK))
             return failed, reason, fail_step
         return failed, reason, None
+
+
+class _RowViews:
+    """Views of row 0 of a simulator's buffers, made once for :meth:`Simulator._step_single`."""
+
+    def __init__(self, sim: Simulator, k: int) -> None:
+        self.models = sim._models[:1]
+        self.init, self.ctrl = sim._init_buf[:1], sim._ctrl_buf[:1]
+        self.state_out, self.buf = sim._state_out[:1], sim._period_buf[:1]
+        self.init_x = self.init[0, sim._state_slice]
+        self.ctrl_u = self.ctrl[0, :, 0]
+        self.force_cols = 1 + sim.plant.qvel_index        # qfrc_applied columns (force noise)
+        self.out_states = self.state_out[0, :, sim._state_slice]
+        self.out_time = self.state_out[0, :, sim._time_col]
+        b = self.buf[0]
+        self.start, self.states, self.u = b[0, :4], b[1:k + 1, :4], b[:k, 4]
+        self.last, self.end = b[k, :4], b[k + 1, :4]
 
 
 def _as_slice(ids: np.ndarray) -> np.ndarray | slice:
