@@ -209,7 +209,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true",
                    help="overwrite the results already in --out (default: refuse)")
     p.add_argument("--resume", action="store_true",
-                   help="complete an interrupted sweep in --out (same file, episodes and seed)")
+                   help="complete an interrupted sweep in --out (same file, episodes and seed); "
+                        "every unit on disk is checked against its SHA-256, row count, columns "
+                        "and configuration first")
+    p.add_argument("--on-mismatch", choices=("recompute", "refuse"), default="recompute",
+                   help="with --resume: a unit file that fails its check is recomputed "
+                        "(default) or stops the run naming the unit")
+    p.add_argument("--allow-version-change", action="store_true",
+                   help="with --resume: complete results written by other versions of "
+                        "pendulum_lqg, mujoco, numpy, scipy or control (default: refuse)")
     p.add_argument("--record", metavar="DIR", default=None,
                    help="also record the worst/median/best/first-failing episode of each "
                         "configuration into DIR (default: none)")
@@ -551,7 +559,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if spec.study is not None:
         if args.executor != "local":
             raise _cfg_error(f"--executor: the {spec.study} study runs on the local executor")
-        out.prepare(spec, force=args.force, resume=args.resume)
+        out.prepare(spec, force=args.force, resume=args.resume,
+                    allow_version_change=args.allow_version_change)
         return _bench_study(spec, out, args)
     # `bench NAME --record DIR` after `bench NAME`: record from the finished results (nothing to
     # rerun, so no --resume needed)
@@ -561,7 +570,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
     try:
         result = run_sweep(spec, out, executor=executor, resume=resume, force=args.force,
                            progress=None if not args.quiet else False, log=log,
-                           record=args.record, nthread=args.nthread)
+                           record=args.record, nthread=args.nthread,
+                           on_mismatch=args.on_mismatch,
+                           allow_version_change=args.allow_version_change)
     except SweepInterrupted as exc:
         print(f"interrupted: {exc}; complete them with: {_resume_command(args, spec, out)}",
               file=sys.stderr)
@@ -658,6 +669,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     except BrokenPipeError:  # e.g. `pendulum-lqg design --json | head`
         return 0
+    except OSError as exc:   # a full disk, a read-only or vanished folder: files written stay
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"error: cannot write or read {where}{exc.strerror or exc}", file=sys.stderr)
+        return EXIT_USAGE
 
 
 if __name__ == "__main__":  # pragma: no cover

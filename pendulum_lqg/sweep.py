@@ -31,8 +31,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.experiments import ExperimentSpec, WorkUnit
-from pendulum_lqg.results import ResultsDir
+from pendulum_lqg.results import ResultsDir, versions
 
 if TYPE_CHECKING:
     from pendulum_lqg.executors import Executor
@@ -83,7 +84,9 @@ class SweepInterrupted(KeyboardInterrupt):
 def run_sweep(spec: ExperimentSpec, out: str | Path | ResultsDir, *,
               executor: Executor | None = None, resume: bool = False, force: bool = False,
               progress: bool | None = None, log: Log = None,
-              record: str | Path | None = None, nthread: int | None = None) -> SweepResult:
+              record: str | Path | None = None, nthread: int | None = None,
+              on_mismatch: str = "recompute", allow_version_change: bool = False,
+              ) -> SweepResult:
     """Run the grid experiment ``spec`` into the results folder ``out``.
 
     Parameters
@@ -98,6 +101,11 @@ def run_sweep(spec: ExperimentSpec, out: str | Path | ResultsDir, *,
         per unit instead when there is no bar
     record : folder for Rerun recordings of each configuration's telling episodes
     nthread : rollout threads of the local executor / of each task
+    on_mismatch : what a resume does with a unit file that fails its check (changed, cut, from
+        another configuration): ``"recompute"`` it (reported through ``log``) or ``"refuse"``
+        (:class:`~pendulum_lqg.errors.ConfigError` naming the unit)
+    allow_version_change : resume results written by other versions of pendulum_lqg or of its
+        numeric libraries (refused by default)
 
     Raises
     ------
@@ -106,16 +114,28 @@ def run_sweep(spec: ExperimentSpec, out: str | Path | ResultsDir, *,
     from pendulum_lqg.executors import LocalExecutor
 
     if spec.study is not None:
-        from pendulum_lqg.errors import ConfigError
-
         raise ConfigError(f"experiment: {spec.name} is a {spec.study} study; run it with "
                           "pendulum_lqg.analysis.studies.run_study")
+    if record is not None and Path(record).exists() and not Path(record).is_dir():
+        raise ConfigError(f"--record: {record} is a file; expected a folder for the recordings "
+                          "(it is created if missing)")
+    if on_mismatch not in ("recompute", "refuse"):
+        raise ConfigError(f"on_mismatch: expected 'recompute' or 'refuse', got {on_mismatch!r}")
     folder = out if isinstance(out, ResultsDir) else ResultsDir(out)
-    executor = executor or LocalExecutor(nthread=nthread)
-    folder.prepare(spec, force=force, resume=resume)
+    folder.prepare(spec, force=force, resume=resume, allow_version_change=allow_version_change)
     units = spec.units()
     try:
-        done = folder.done()
+        mismatched: list[tuple[str, str]] = []
+        done = folder.verified(spec, lambda key, why: mismatched.append((key, why)))
+        if mismatched and on_mismatch == "refuse":
+            key, why = mismatched[0]
+            raise ConfigError(f"--resume: unit {key} fails its check: {why} "
+                              f"({len(mismatched)} unit(s) in all); drop --on-mismatch refuse to "
+                              "recompute them")
+        for key, why in mismatched:
+            if log is not None:
+                log(f"unit {key}: {why}; recomputing it")
+        executor = executor or LocalExecutor(nthread=nthread)
         todo = [u for u in units if u.key not in done]
         started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
         t0 = time.perf_counter()
@@ -129,7 +149,8 @@ def run_sweep(spec: ExperimentSpec, out: str | Path | ResultsDir, *,
                         continue
                     folder.write_unit(unit, rows)  # type: ignore[arg-type]
             except KeyboardInterrupt:
-                raise SweepInterrupted(folder.path, len(folder.done()), len(units)) from None
+                raise SweepInterrupted(folder.path, len(folder.verified(spec)), len(units)
+                                       ) from None
             finally:
                 executor.close()
         if failures:
@@ -137,7 +158,7 @@ def run_sweep(spec: ExperimentSpec, out: str | Path | ResultsDir, *,
         meta = {"started": started, "elapsed_s": round(time.perf_counter() - t0, 3),
                 "units_run_now": len(todo), "executor": executor.describe(),
                 "python": platform.python_version(), "machine": platform.machine(),
-                "cpus": os.cpu_count()}
+                "cpus": os.cpu_count(), "versions": versions()}
         summary = folder.finalize(spec, meta)
         if record is not None:
             record_telling_episodes(spec, folder, Path(record), nthread=nthread, log=log)
