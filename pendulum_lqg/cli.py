@@ -427,10 +427,11 @@ def _print_design(d: dict[str, Any], plant: Any) -> None:
 
 # ---- run -----------------------------------------------------------------------------------------
 def cmd_run(args: argparse.Namespace) -> int:
+    from pendulum_lqg.limits import MAX_RECORDED_EPISODES, MAX_RUN_EPISODES, check_at_most
     from pendulum_lqg.metrics import summarize
     from pendulum_lqg.plant import load_plant
     from pendulum_lqg.plugins import build_policy, is_plugin_ref, split_builtin
-    from pendulum_lqg.sim import Scenario, run_episodes
+    from pendulum_lqg.sim import Scenario
 
     if args.policy is not None and (args.controller or args.observer):
         raise _cfg_error("--policy: give either --policy or --controller/--observer, not both")
@@ -447,8 +448,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     spec = _spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
     policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)
     recording = args.record is not None or args.spawn
-    res = run_episodes(plant, scenario, policy, seed=args.seed, episodes=range(args.episodes),
-                       backend=args.backend, nthread=args.nthread, trajectory=recording)
+    check_at_most("--episodes", args.episodes, MAX_RUN_EPISODES,
+                  "run keeps every row in memory; bench streams larger studies to disk")
+    if recording:
+        check_at_most("--episodes", args.episodes, MAX_RECORDED_EPISODES,
+                      "episodes recorded with --record/--spawn, whose trajectories are kept")
+    res = _run_in_batches(plant, scenario, policy, args, trajectory=recording)
     summary = summarize(res.rows)
     config = {"policy": policy.name, "seed": args.seed, "episodes": args.episodes,
               "backend": args.backend, "scenario": scenario.to_dict(),
@@ -541,6 +546,38 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None
     if sc["noise"]["scale"] != 0:
         con.print("settling time: not reported under noise (|θ| keeps leaving the "
                   f"{sc['settle_band']:g} rad band); run with --noise-scale 0 for it")
+
+
+def _run_in_batches(plant: Any, scenario: Any, policy: Any, args: argparse.Namespace, *,
+                    trajectory: bool) -> Any:
+    """``run_episodes`` over ``--episodes`` in batches (memory flat in the episode count; the rows
+    do not depend on the batching), with a progress line on stderr every few seconds once a run
+    takes long."""
+    import time
+
+    from pendulum_lqg import limits
+    from pendulum_lqg.sim import BatchResult, run_episodes
+
+    steps = scenario.n_periods * max(1, round(scenario.control_period / plant.timestep))
+    size = max(1, min(limits.RUN_BATCH, 20_000_000 // max(steps, 1)))    # ≤ ~2·10⁷ physics steps each
+    total = args.episodes
+    rows: list[dict[str, object]] = []
+    trajectories: list[Any] | None = [] if trajectory else None
+    t0 = last = time.perf_counter()
+    for start in range(0, total, size):
+        res = run_episodes(plant, scenario, policy, seed=args.seed,
+                           episodes=range(start, min(start + size, total)), backend=args.backend,
+                           nthread=args.nthread, trajectory=trajectory)
+        rows += res.rows
+        if trajectories is not None:
+            trajectories += res.trajectories or []
+        now = time.perf_counter()
+        if len(rows) < total and now - last >= limits.PROGRESS_EVERY_S:
+            eta = (now - t0) / len(rows) * (total - len(rows))
+            print(f"run: {len(rows):,}/{total:,} episodes, {now - t0:.0f} s, about {eta:.0f} s "
+                  "left", file=sys.stderr)
+            last = now
+    return BatchResult(rows=rows, trajectories=trajectories)
 
 
 # ---- bench ---------------------------------------------------------------------------------------

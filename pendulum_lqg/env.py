@@ -592,9 +592,6 @@ class CartPoleLQGVectorEnv(VectorEnv):
             model_overrides=model_overrides, model_path=model_path, plant=plant,
             measurement_delay=measurement_delay, actuator_delay=actuator_delay, dropout=dropout,
             actuator_tau=actuator_tau, randomize=randomize)
-        if nthread is not None and (isinstance(nthread, bool) or not isinstance(nthread, int)
-                                    or nthread < 0):
-            raise ConfigError(f"nthread: expected a non-negative integer, got {nthread!r}")
         self.scenario = self.config.scenario
         self.observation_mode = self.config.observation_mode
         self.plant, self._sim = self.config.make_simulator(nthread=nthread)

@@ -28,7 +28,7 @@ from mujoco import rollout as mj_rollout
 
 from pendulum_lqg.plant import load_plant
 from pendulum_lqg.policy import DesignSpec, design_policy
-from pendulum_lqg.sim import Scenario, _cpu_count, run_episodes, shard_count
+from pendulum_lqg.sim import Scenario, run_episodes, shard_count, thread_count
 
 
 def raw_rollout_rate(plant: object, episodes: int, nstep: int, nthread: int, *,
@@ -60,7 +60,7 @@ def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None
              repeats: int = 5, memory: bool = False,
              log: Callable[[str], None] = lambda s: None) -> dict[str, object]:
     plant = load_plant()
-    nthread = nthread if nthread is not None else min(8, _cpu_count())
+    nthread = thread_count(nthread)
     scenario = Scenario(duration=duration)
     policy = design_policy(plant, scenario.control_period, scenario.noise,
                            DesignSpec(controller="dlqr", observer="kalman"))

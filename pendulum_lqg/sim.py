@@ -289,9 +289,7 @@ class Simulator:
         self._control_spec = st.mjSTATE_CTRL.value | (
             st.mjSTATE_QFRC_APPLIED.value if self._force_noise else 0)
         self._ncontrol = mujoco.mj_stateSize(self.model, self._control_spec)
-        self._nthread = nthread if nthread is not None else min(8, _cpu_count())
-        if self._nthread < 0:
-            raise ConfigError(f"nthread: expected a non-negative integer, got {nthread!r}")
+        self._nthread = thread_count(nthread)
         self._rollout: mj_rollout.Rollout | None = None
         if backend == "rollout":
             self._rollout = mj_rollout.Rollout(nthread=self._nthread if self._nthread > 1 else 0)
@@ -814,6 +812,17 @@ def rollout_chunk(n: int, nthread: int, nstep: int) -> int | None:
     return -(-n // chunks)
 
 
+def thread_count(nthread: int | None) -> int:
+    """Rollout threads for a request: ``None`` → the CPU cores this process may use, at most 8;
+    a number → itself, capped to those cores (more threads than cores only add hand-offs, and
+    thousands of them can exhaust the process)."""
+    if nthread is None:
+        return min(8, _cpu_count())
+    if isinstance(nthread, bool) or not isinstance(nthread, int | np.integer) or nthread < 0:
+        raise ConfigError(f"nthread: expected a non-negative integer, got {nthread!r}")
+    return min(int(nthread), _cpu_count())
+
+
 def _cpu_count() -> int:
     import os
 
@@ -986,7 +995,7 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
         ``x0``/``x0_std`` draw (e.g. a region-of-attraction grid)
     """
     episodes = [int(e) for e in episodes]
-    nthread = nthread if nthread is not None else min(8, _cpu_count())
+    nthread = thread_count(nthread)
     shards = shard_count(len(episodes), nthread, backend, policy)
     if shards == 1:
         return _run_batch(plant, scenario, policy, seed, episodes, backend, nthread, trajectory,

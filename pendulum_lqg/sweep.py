@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.experiments import ExperimentSpec, WorkUnit
+from pendulum_lqg.limits import MAX_BENCH_ROWS, check_at_most
 from pendulum_lqg.results import ResultsDir, versions
 
 if TYPE_CHECKING:
@@ -121,6 +122,8 @@ def run_sweep(spec: ExperimentSpec, out: str | Path | ResultsDir, *,
                           "(it is created if missing)")
     if on_mismatch not in ("recompute", "refuse"):
         raise ConfigError(f"on_mismatch: expected 'recompute' or 'refuse', got {on_mismatch!r}")
+    check_at_most("episodes × configurations", spec.episodes * len(spec.configurations),
+                  MAX_BENCH_ROWS, "the summary holds every row of the experiment in memory")
     folder = out if isinstance(out, ResultsDir) else ResultsDir(out)
     folder.prepare(spec, force=force, resume=resume, allow_version_change=allow_version_change)
     units = spec.units()

@@ -32,6 +32,7 @@ import numpy as np
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.jsonio import plain
+from pendulum_lqg.limits import MAX_FREQUENCIES, MAX_MAP_POINTS, check_at_most
 
 #: Parameters of each study and their defaults.
 STUDY_PARAMS: dict[str, dict[str, object]] = {
@@ -85,6 +86,20 @@ def parse_study_params(study: str, table: dict[str, object]) -> dict[str, object
             if isinstance(value, bool) or not isinstance(value, int | float) \
                     or not np.isfinite(value) or value <= 0:
                 raise ConfigError(f"{where}: expected a positive number, got {value!r}")
+    if study == "margins":
+        for key in ("n_omega", "nyquist_points"):
+            check_at_most(f"margins.{key}", out[key], MAX_FREQUENCIES,  # type: ignore[arg-type]
+                          "frequencies held in memory at once")
+        check_at_most("margins.q", len(out["q"]), 100, "recovery parameters")  # type: ignore[arg-type]
+    if study == "roa":
+        for key in ("map_theta", "map_theta_dot"):
+            points = out[key][2]  # type: ignore[index]
+            if points != int(points):
+                raise ConfigError(f"roa.{key}: the number of points must be a whole number, "
+                                  f"got {points!r}")
+        check_at_most("roa.map_theta × map_theta_dot points",
+                      int(out["map_theta"][2]) * int(out["map_theta_dot"][2]),  # type: ignore[index]
+                      MAX_MAP_POINTS, "one episode each, run as one batch")
     if study == "margins" and not out["omega_min"] < out["omega_max"]:  # type: ignore[operator]
         raise ConfigError("margins.omega_min: must be below omega_max")
     if study == "roa":
