@@ -149,7 +149,7 @@ class Configuration:
 
     def validate(self) -> None:
         """Build the configuration and check it against the (possibly overridden) model."""
-        from pendulum_lqg.linearize import steps_per_period
+        from pendulum_lqg.plant import steps_per_period
 
         scenario, _ = self.build()
         steps_per_period(self.plants(scenario)[1], scenario.control_period)

@@ -21,8 +21,7 @@ import numpy as np
 
 from pendulum_lqg.design import zoh
 from pendulum_lqg.design.structure import StructureReport, structure
-from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.plant import Plant
+from pendulum_lqg.plant import Plant, steps_per_period
 
 #: Finite-difference step for states and inputs (central differences: error O(eps²)).
 FD_EPS = 1e-6
@@ -61,22 +60,6 @@ class DiscreteModel:
 
     def structure(self) -> StructureReport:
         return structure(self.Phi, self.Gamma, self.C, discrete=True)
-
-
-def steps_per_period(plant: Plant, dt: float) -> int:
-    """Number of physics steps in one control period; ``dt`` must be a positive multiple of h."""
-    try:
-        dt = float(dt)
-    except (TypeError, ValueError) as exc:
-        raise ConfigError(f"control_period: expected a number of seconds, got {dt!r}") from exc
-    h = plant.timestep
-    if not np.isfinite(dt) or dt <= 0:
-        raise ConfigError(f"control_period: expected a positive number of seconds, got {dt!r}")
-    k = round(dt / h)
-    if k < 1 or abs(k * h - dt) > 1e-9 * max(dt, h):
-        raise ConfigError(f"control_period: {dt!r} s is not a positive integer multiple of the "
-                          f"physics step {h!r} s")
-    return int(k)
 
 
 def _equilibrium(plant: Plant) -> mujoco.MjData:

@@ -387,3 +387,22 @@ class Plant:
         """Columns of the full-physics state vector holding ``[p, θ, ṗ, θ̇]``."""
         _, qpos_cols, qvel_cols = self.physics_state_layout
         return np.concatenate([qpos_cols, qvel_cols])
+
+
+def steps_per_period(plant: Plant, dt: float) -> int:
+    """Number of physics steps in one control period; ``dt`` must be a positive multiple of h.
+
+    Lives with the plant (not the linearisation) so the simulation core imports no design code.
+    """
+    try:
+        dt = float(dt)
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"control_period: expected a number of seconds, got {dt!r}") from exc
+    h = plant.timestep
+    if not np.isfinite(dt) or dt <= 0:
+        raise ConfigError(f"control_period: expected a positive number of seconds, got {dt!r}")
+    k = round(dt / h)
+    if k < 1 or abs(k * h - dt) > 1e-9 * max(dt, h):
+        raise ConfigError(f"control_period: {dt!r} s is not a positive integer multiple of the "
+                          f"physics step {h!r} s")
+    return int(k)

@@ -104,7 +104,8 @@ class PolicyContext:
     @classmethod
     def build(cls, plant: Plant, scenario: Scenario) -> PolicyContext:
         """The context of ``plant`` (nominal) under ``scenario``'s period, noise and cost."""
-        from pendulum_lqg.linearize import discretize_zoh, linearize, steps_per_period
+        from pendulum_lqg.linearize import discretize_zoh, linearize
+        from pendulum_lqg.plant import steps_per_period
         from pendulum_lqg.policy import noise_design_matrices
 
         steps_per_period(plant, scenario.control_period)

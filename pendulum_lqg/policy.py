@@ -48,10 +48,10 @@ from pendulum_lqg.estimators import (
     TrueState,
     mv,
 )
-from pendulum_lqg.linearize import ContinuousModel, discretize_zoh, linearize, steps_per_period
+from pendulum_lqg.linearize import ContinuousModel, discretize_zoh, linearize
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS
 from pendulum_lqg.noise import NoiseModel
-from pendulum_lqg.plant import Plant
+from pendulum_lqg.plant import Plant, steps_per_period
 
 Controller = Literal["lqr", "dlqr"]
 Observer = Literal["none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy",

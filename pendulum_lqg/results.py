@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import csv
 import hashlib
-import io
 import json
 import os
 import re
@@ -32,11 +31,18 @@ import time
 from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pendulum_lqg import SCHEMA_VERSION, __version__
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.experiments import ExperimentSpec, WorkUnit
+from pendulum_lqg.files import atomic_write, read_csv, rows_to_csv
 from pendulum_lqg.metrics import EPISODE_FIELDS, summarize
+
+if TYPE_CHECKING:                 # experiments imports the studies, which write through us
+    from pendulum_lqg.experiments import ExperimentSpec, WorkUnit
+
+__all__ = ["ResultsDir", "atomic_write", "check_name", "markdown_table", "read_csv",
+           "rows_to_csv", "summarize_configs", "unit_columns", "versions"]
 
 #: What an experiment name may look like: it names a folder under ``results/`` and files.
 NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,99}")
@@ -78,52 +84,6 @@ def _protected(path: Path) -> str | None:
     if real == Path(real.anchor):
         return "it is the filesystem root"
     return None
-
-
-def atomic_write(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file and ``os.replace`` (never half-written)."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8", newline="") as fh:
-        fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
-
-
-def _cell(v: object) -> str:
-    if isinstance(v, float):
-        return repr(v)
-    return str(v)
-
-
-def rows_to_csv(rows: list[dict[str, object]]) -> str:
-    if not rows:
-        return ""
-    buf = io.StringIO()
-    fields = list(rows[0])
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(fields)
-    for r in rows:
-        w.writerow([_cell(r.get(f, "")) for f in fields])
-    return buf.getvalue()
-
-
-def _parse(v: str) -> object:
-    if v in ("True", "False"):
-        return v == "True"
-    try:
-        return int(v)
-    except ValueError:
-        pass
-    try:
-        return float(v)
-    except ValueError:
-        return v
-
-
-def read_csv(path: Path) -> list[dict[str, object]]:
-    with open(path, newline="", encoding="utf-8") as fh:
-        return [{k: _parse(v) for k, v in row.items()} for row in csv.DictReader(fh)]
 
 
 class ResultsDir:

@@ -45,7 +45,6 @@ from mujoco import rollout as mj_rollout
 
 from pendulum_lqg._config import config_vector
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.linearize import steps_per_period
 from pendulum_lqg.metrics import (
     FAIL_DIVERGED,
     FAIL_POLE,
@@ -55,7 +54,7 @@ from pendulum_lqg.metrics import (
 )
 from pendulum_lqg.names import PLANTS
 from pendulum_lqg.noise import NoiseModel, NoiseStream, UniformStream
-from pendulum_lqg.plant import ModelOverrides, Plant, Randomization, load_plant
+from pendulum_lqg.plant import ModelOverrides, Plant, Randomization, load_plant, steps_per_period
 
 #: Any state component beyond this magnitude counts as divergence.
 RUNAWAY = 1e6

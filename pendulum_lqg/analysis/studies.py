@@ -132,7 +132,7 @@ def run_study(spec: Any, out: Any, *, nthread: int | None = None, log: Log = Non
 
 # ---- helpers -------------------------------------------------------------------------------------
 def _write(out: Any, name: str, text: str) -> None:
-    from pendulum_lqg.results import atomic_write
+    from pendulum_lqg.files import atomic_write
 
     atomic_write(out.path / name, text)
 
@@ -147,7 +147,7 @@ def _plain(obj: object) -> object:
 
 
 def _csv(rows: list[dict[str, object]]) -> str:
-    from pendulum_lqg.results import rows_to_csv
+    from pendulum_lqg.files import rows_to_csv
 
     return rows_to_csv(rows)
 
