@@ -159,7 +159,8 @@ class MetricsAccumulator:
             self.settle[self._index(ids)[has]] = t[has] + (last[has] + 1) * h
         if x_hat is not None:
             err = x_hat - x_start
-            self.est2[ids] += err * err
+            with np.errstate(over="ignore", invalid="ignore"):     # a diverged row: inf is honest
+                self.est2[ids] += err * err
             self.n_est[ids] += 1
         if fail_step is not None:
             f = self._index(ids)[failed]

@@ -58,6 +58,10 @@ from pendulum_lqg.plant import ModelOverrides, Plant, Randomization, load_plant,
 
 #: Any state component beyond this magnitude counts as divergence.
 RUNAWAY = 1e6
+#: MuJoCo's warnings for an unstable state (it then resets the data; ``mujoco.rollout`` stops).
+_INSTABILITY_WARNINGS = tuple(int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS,
+                                               mujoco.mjtWarning.mjWARN_BADQVEL,
+                                               mujoco.mjtWarning.mjWARN_BADQACC))
 
 
 @dataclass(frozen=True)
@@ -683,7 +687,14 @@ class Simulator:
                 mujoco.mj_step(m, d)
                 out[r, j, :2] = d.qpos[qi]
                 out[r, j, 2:] = d.qvel[vi]
-            reset_flag[r] = abs(d.time - self.k * self.h) > 0.5 * self.h
+                if any(d.warning[w].number for w in _INSTABILITY_WARNINGS):
+                    # MuJoCo reset the data after an instability: as mujoco.rollout does, stop
+                    # and hold the state reached for the rest of the period
+                    out[r, j + 1:] = out[r, j]
+                    reset_flag[r] = True
+                    break
+            else:
+                reset_flag[r] = abs(d.time - self.k * self.h) > 0.5 * self.h
         return reset_flag
 
     def _within_limits(self, buf: np.ndarray) -> bool:

@@ -116,6 +116,33 @@ def test_sharded_batches_and_the_single_row_path_equal_one_batch(plant):
         assert _dump([alone]) == _dump([whole.rows[e]])
 
 
+EXTREME_STARTS = [(0, 0, 0, 1e300), (0, 0, 1e300, 0), (1e300, 0, 0, 0), (0, 0, 0, -1e300),
+                  (0, 0, 0, 1e15), (0, 0, 0, 1e8), (0, 0.1, 0, 1e6), (0, 0.1, 0, 1e5),
+                  (0, 0, 0, 3e5), (0, 3.0, 0, 0), (0.5, 0, 30, 0), (0, 0.4, 0, 50), (0, 0, 0, 0)]
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_backends_agree_on_failures_from_extreme_initial_states(plant):
+    """MuJoCo resets its data after an instability (θ̇₀ = 1e300 …): ``mujoco.rollout`` stops there,
+    the mj_step loop now does the same, so both call it ``diverged`` with identical rows; the
+    batch, the single-row path and the step backend agree on every case."""
+    sc = LECTURE.replace(duration=0.2)
+    pol = lambda: design_policy(plant, sc.control_period, sc.noise, DesignSpec("dlqr", "kalman"))  # noqa: E731
+    x0 = np.array(EXTREME_STARTS, dtype=float)
+    n = len(x0)
+    batch = run_episodes(plant, sc, pol(), seed=0, episodes=range(n), initial_states=x0).rows
+    for e in range(n):
+        one = x0[e:e + 1]
+        step = run_episodes(plant, sc, pol(), seed=0, episodes=[e], backend="step",
+                            initial_states=one).rows[0]
+        single = run_episodes(plant, sc, pol(), seed=0, episodes=[e], initial_states=one).rows[0]
+        assert _dump([batch[e]]) == _dump([step]) == _dump([single]), EXTREME_STARTS[e]
+    reasons = [r["failure_reason"] for r in batch]
+    assert reasons[:7] == ["diverged"] * 7
+    assert reasons[7:10] == ["pole_fell"] * 3 and reasons[10] == "track_limit"
+    assert batch[-1]["success"]
+
+
 def test_rollout_chunks_are_a_multiple_of_the_threads():
     assert rollout_chunk(64, 2, 10) == 32                 # not 30 + 30 + 4
     assert rollout_chunk(1024, 2, 10) == 52               # 20 chunks, ten per thread
