@@ -12,6 +12,7 @@ One env step is one control period ``T``: the core's measure → act → step or
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -75,15 +76,32 @@ class EnvConfig:
     model_path: str | None
 
     @classmethod
-    def build(cls, *, control_period: float, duration: float, observation_mode: str,
-              noise_scale: float, process_noise: str,
-              process_density: float | Sequence[float] | None,
-              measurement_variance: float | Sequence[float], x0: Sequence[float],
-              x0_std: Sequence[float], theta_max: float, cost_Q: Sequence[float], cost_R: float,
-              reward_scale: float, model_overrides: Mapping[str, float] | ModelOverrides | None,
-              model_path: str | None, plant: str = "mujoco", measurement_delay: float = 0.0,
-              actuator_delay: float = 0.0, dropout: float = 0.0, actuator_tau: float = 0.0,
-              randomize: Mapping[str, Sequence[float]] | None = None) -> EnvConfig:
+    def from_keywords(cls, keywords: dict[str, Any]) -> EnvConfig:
+        """:meth:`build` from an env's ``**keywords`` (an unknown keyword is a one-line error)."""
+        unknown = sorted(set(keywords) - set(inspect.signature(cls.build).parameters))
+        if unknown:
+            known = ", ".join(p for p in inspect.signature(cls.build).parameters if p != "cls")
+            raise ConfigError(f"{unknown[0]}: not a keyword of the environment; known: {known}, "
+                              "and normalize_action, render_mode, width, height")
+        return cls.build(**keywords)
+
+    @classmethod
+    def build(cls, *, control_period: float = 0.01, duration: float = 10.0,
+              observation_mode: ObservationMode = "measurement", noise_scale: float = 1.0,
+              process_noise: Literal["state", "force"] = "state",
+              process_density: float | Sequence[float] | None = None,
+              measurement_variance: float | Sequence[float] = LECTURE_V,
+              x0: Sequence[float] = (0.0, 0.1, 0.0, 0.0),
+              x0_std: Sequence[float] = (0.0, 0.0, 0.0, 0.0), theta_max: float = 0.5,
+              cost_Q: Sequence[float] = (1.0, 1.0, 1.0, 1.0), cost_R: float = 1.0,
+              reward_scale: float = DEFAULT_REWARD_SCALE,
+              model_overrides: Mapping[str, float] | ModelOverrides | None = None,
+              model_path: str | None = None, plant: str = "mujoco",
+              measurement_delay: float = 0.0, actuator_delay: float = 0.0, dropout: float = 0.0,
+              actuator_tau: float = 0.0, randomize: Mapping[str, Sequence[float]] | None = None,
+              ) -> EnvConfig:
+        """The one list of the environments' scenario keywords and their defaults (documented in
+        :class:`CartPoleLQGEnv`); both env classes pass their ``**config`` here."""
         if observation_mode not in OBSERVATION_MODES:
             raise ConfigError(f"observation_mode: expected 'measurement' or 'state', got "
                               f"{observation_mode!r}")
@@ -364,30 +382,9 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 100}  # noqa: RUF012
 
-    def __init__(self, *, control_period: float = 0.01, duration: float = 10.0,
-                 observation_mode: ObservationMode = "measurement", noise_scale: float = 1.0,
-                 process_noise: Literal["state", "force"] = "state",
-                 process_density: float | Sequence[float] | None = None,
-                 measurement_variance: float | Sequence[float] = LECTURE_V,
-                 x0: Sequence[float] = (0.0, 0.1, 0.0, 0.0),
-                 x0_std: Sequence[float] = (0.0, 0.0, 0.0, 0.0), theta_max: float = 0.5,
-                 cost_Q: Sequence[float] = (1.0, 1.0, 1.0, 1.0), cost_R: float = 1.0,
-                 reward_scale: float = DEFAULT_REWARD_SCALE,
-                 model_overrides: Mapping[str, float] | ModelOverrides | None = None,
-                 model_path: str | None = None, normalize_action: bool = False,
-                 plant: str = "mujoco",
-                 measurement_delay: float = 0.0, actuator_delay: float = 0.0,
-                 dropout: float = 0.0, actuator_tau: float = 0.0,
-                 randomize: Mapping[str, Sequence[float]] | None = None,
-                 render_mode: str | None = None, width: int = 640, height: int = 480) -> None:
-        self.config = EnvConfig.build(
-            control_period=control_period, duration=duration, observation_mode=observation_mode,
-            noise_scale=noise_scale, process_noise=process_noise, process_density=process_density,
-            measurement_variance=measurement_variance, x0=x0, x0_std=x0_std, theta_max=theta_max,
-            cost_Q=cost_Q, cost_R=cost_R, reward_scale=reward_scale,
-            model_overrides=model_overrides, model_path=model_path, plant=plant,
-            measurement_delay=measurement_delay, actuator_delay=actuator_delay, dropout=dropout,
-            actuator_tau=actuator_tau, randomize=randomize)
+    def __init__(self, *, normalize_action: bool = False, render_mode: str | None = None,
+                 width: int = 640, height: int = 480, **config: Any) -> None:
+        self.config = EnvConfig.from_keywords(config)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ConfigError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
@@ -562,36 +559,15 @@ class CartPoleLQGVectorEnv(VectorEnv):
                                 "autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(self, num_envs: int, *, autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
-                 max_episode_steps: int | None = None,
-                 nthread: int | None = None, control_period: float = 0.01,
-                 duration: float = 10.0, observation_mode: ObservationMode = "measurement",
-                 noise_scale: float = 1.0, process_noise: Literal["state", "force"] = "state",
-                 process_density: float | Sequence[float] | None = None,
-                 measurement_variance: float | Sequence[float] = LECTURE_V,
-                 x0: Sequence[float] = (0.0, 0.1, 0.0, 0.0),
-                 x0_std: Sequence[float] = (0.0, 0.0, 0.0, 0.0), theta_max: float = 0.5,
-                 cost_Q: Sequence[float] = (1.0, 1.0, 1.0, 1.0), cost_R: float = 1.0,
-                 reward_scale: float = DEFAULT_REWARD_SCALE,
-                 model_overrides: Mapping[str, float] | ModelOverrides | None = None,
-                 model_path: str | None = None, normalize_action: bool = False,
-                 plant: str = "mujoco",
-                 measurement_delay: float = 0.0, actuator_delay: float = 0.0,
-                 dropout: float = 0.0, actuator_tau: float = 0.0,
-                 randomize: Mapping[str, Sequence[float]] | None = None,
-                 render_mode: str | None = None, width: int = 640, height: int = 480) -> None:
+                 max_episode_steps: int | None = None, nthread: int | None = None,
+                 normalize_action: bool = False, render_mode: str | None = None,
+                 width: int = 640, height: int = 480, **config: Any) -> None:
         self.num_envs = _positive_int("num_envs", num_envs)
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
         if render_mode is not None and render_mode != "rgb_array":
             raise ConfigError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
-        self.config = EnvConfig.build(
-            control_period=control_period, duration=duration, observation_mode=observation_mode,
-            noise_scale=noise_scale, process_noise=process_noise, process_density=process_density,
-            measurement_variance=measurement_variance, x0=x0, x0_std=x0_std, theta_max=theta_max,
-            cost_Q=cost_Q, cost_R=cost_R, reward_scale=reward_scale,
-            model_overrides=model_overrides, model_path=model_path, plant=plant,
-            measurement_delay=measurement_delay, actuator_delay=actuator_delay, dropout=dropout,
-            actuator_tau=actuator_tau, randomize=randomize)
+        self.config = EnvConfig.from_keywords(config)
         self.scenario = self.config.scenario
         self.observation_mode = self.config.observation_mode
         self.plant, self._sim = self.config.make_simulator(nthread=nthread)

@@ -715,3 +715,21 @@ def test_headless_machine_gets_a_working_gl_backend_automatically():
     out = subprocess.run([sys.executable, "-c", forced], capture_output=True, text=True,
                          timeout=120, env={**env, "MUJOCO_GL": "glfw"})
     assert out.stdout.split() == ["PendulumLQGError", "0", "True"], out.stderr
+
+
+def test_both_envs_take_their_keywords_from_one_list():
+    """``EnvConfig.build`` is the one keyword list: an unknown keyword is a one-line ConfigError
+    naming it for the single and the vector env alike, and both get the same defaults."""
+    import inspect
+
+    from pendulum_lqg.env import CartPoleLQGEnv, CartPoleLQGVectorEnv, EnvConfig
+    from pendulum_lqg.errors import ConfigError
+
+    for make in (lambda: CartPoleLQGEnv(bogus=1), lambda: CartPoleLQGVectorEnv(2, bogus=1)):
+        with pytest.raises(ConfigError, match=r"^bogus: not a keyword of the environment"):
+            make()
+    defaults = {k: p.default for k, p in inspect.signature(EnvConfig.build).parameters.items()}
+    assert defaults["duration"] == 10.0 and defaults["control_period"] == 0.01
+    single, vector = CartPoleLQGEnv(), CartPoleLQGVectorEnv(2)
+    assert single.scenario == vector.scenario == EnvConfig.build().scenario
+    vector.close()
