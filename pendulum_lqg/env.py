@@ -16,7 +16,7 @@ import inspect
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal, SupportsFloat
+from typing import Any, Literal, SupportsFloat, overload
 
 import gymnasium as gym
 import mujoco
@@ -114,7 +114,7 @@ class EnvConfig:
             noise = NoiseModel(measurement_variance=measurement_variance,  # type: ignore[arg-type]
                                scale=noise_scale)
         else:
-            noise = NoiseModel(process=process_noise,  # type: ignore[arg-type]
+            noise = NoiseModel(process=process_noise,
                                process_density=process_density,  # type: ignore[arg-type]
                                measurement_variance=measurement_variance,  # type: ignore[arg-type]
                                scale=noise_scale)
@@ -137,7 +137,7 @@ class EnvConfig:
                             dropout=dropout, actuator_tau=actuator_tau,
                             randomize=dict(randomize) if isinstance(randomize, Mapping)
                             else randomize)  # type: ignore[arg-type]
-        return cls(scenario=scenario, observation_mode=observation_mode,  # type: ignore[arg-type]
+        return cls(scenario=scenario, observation_mode=observation_mode,
                    reward_scale=_positive("reward_scale", reward_scale), model_path=model_path)
 
     def make_simulator(self, *, nthread: int | None) -> tuple[Plant, Simulator]:
@@ -147,7 +147,11 @@ class EnvConfig:
         return plant, sim
 
 
-def step_reward(cost: np.ndarray | np.float64, failed: np.ndarray | bool, scale_dt: float,
+@overload
+def step_reward(cost: np.ndarray, failed: np.ndarray, scale_dt: float) -> np.ndarray: ...
+@overload
+def step_reward(cost: np.float64 | float, failed: bool, scale_dt: float) -> float: ...
+def step_reward(cost: np.ndarray | np.float64 | float, failed: np.ndarray | bool, scale_dt: float,
                 ) -> np.ndarray | float:
     """``r = exp(−c / (s·T))`` for a period that survived (at least :data:`REWARD_FLOOR`, so it is
     always worth more than failing), ``0`` for the period that failed.
@@ -205,6 +209,10 @@ class _Actions:
             u = self.lo + (u + 1.0) * (0.5 * (self.hi - self.lo))
         return u
 
+    @overload
+    def applied(self, u: float) -> float: ...
+    @overload
+    def applied(self, u: np.ndarray) -> np.ndarray: ...
     def applied(self, u: np.ndarray | float) -> np.ndarray | float:
         """The force the actuator applies (saturated), as the core applies it (a float for a
         float: one row without numpy's per-call cost)."""
@@ -631,10 +639,14 @@ class CartPoleLQGVectorEnv(VectorEnv):
             rows = np.nonzero(mask)[0]
         else:
             rows = self._all
-        gens = self._gens if self._gens else [None] * n
-        self._gens = [seeding.np_random(None if seeds[i] is None else int(seeds[i]))[0]
-                      if i in set(rows.tolist()) and (seeds[i] is not None or gens[i] is None)
-                      else gens[i] for i in range(n)]  # type: ignore[misc]
+        gens: list[np.random.Generator | None] = list(self._gens) if self._gens else [None] * n
+        chosen = set(rows.tolist())
+        for i, s in enumerate(seeds):
+            if i in chosen and (s is not None or gens[i] is None):
+                gens[i] = seeding.np_random(None if s is None else int(s))[0]
+        # every entry is a Generator now: a first reset covers every sub-env
+        self._gens = [g for g in gens if g is not None]
+        assert len(self._gens) == n
         if rows.size == n:
             self._sim.reset(self._gens, ids=self._all)
             self._running_cost[:] = 0.0

@@ -17,6 +17,7 @@ Aggregates: success rate with its 95 % Wilson score interval; mean ± standard e
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -85,6 +86,19 @@ class MetricsAccumulator:
 
     _SUMS = ("alive", "cost", "theta2", "p2", "u2", "sat", "n_est", "settle",
              "max_theta", "max_p", "max_u", "fail_time")
+    # the running sums (one entry per episode id), made by _alloc from _SUMS
+    alive: np.ndarray
+    cost: np.ndarray
+    theta2: np.ndarray
+    p2: np.ndarray
+    u2: np.ndarray
+    sat: np.ndarray
+    n_est: np.ndarray
+    settle: np.ndarray
+    max_theta: np.ndarray
+    max_p: np.ndarray
+    max_u: np.ndarray
+    fail_time: np.ndarray
 
     def __init__(self, n: int, *, h: float, k: int, weights: np.ndarray, u_max: float,
                  settle_band: float) -> None:
@@ -176,15 +190,15 @@ class MetricsAccumulator:
     def _index(ids: np.ndarray | slice) -> np.ndarray:
         return np.arange(ids.start, ids.stop) if isinstance(ids, slice) else ids
 
-    def rows(self, ids: np.ndarray, seeds: np.ndarray | None = None) -> list[dict[str, object]]:
+    def rows(self, ids: np.ndarray, seeds: np.ndarray | None = None) -> list[dict[str, Any]]:
         """Episode records (``EPISODE_FIELDS``) for the given ids."""
-        out = []
+        out: list[dict[str, Any]] = []
         for i, e in enumerate(np.asarray(ids)):
             alive = self.alive[e] if self.alive[e] > 0 else float("nan")
             n_est = self.n_est[e]
             est = np.sqrt(self.est2[e] / n_est) if n_est > 0 else np.full(4, np.nan)
             success = bool(self.reason[e] == FAIL_NONE)
-            row: dict[str, object] = {
+            row: dict[str, Any] = {
                 "episode": int(e),
                 "seed": int(seeds[i]) if seeds is not None else -1,
                 "success": success,
@@ -233,7 +247,7 @@ SUMMARY_METRICS: tuple[str, ...] = (
 )
 
 
-def summarize(rows: list[dict[str, object]]) -> dict[str, object]:
+def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """Aggregate episode rows: success rate with Wilson 95 % CI, mean ± SE of each metric.
 
     ``cost`` and ``settling_time`` are averaged over the successful episodes only (a failed
@@ -244,7 +258,7 @@ def summarize(rows: list[dict[str, object]]) -> dict[str, object]:
     succ = np.array([bool(r["success"]) for r in rows], dtype=bool)
     s = int(succ.sum())
     lo, hi = wilson_interval(s, n)
-    out: dict[str, object] = {"episodes": n, "successes": s,
+    out: dict[str, Any] = {"episodes": n, "successes": s,
                               "success_rate": s / n if n else float("nan"),
                               "success_ci95": [lo, hi]}
     reasons: dict[str, int] = {}
@@ -253,7 +267,7 @@ def summarize(rows: list[dict[str, object]]) -> dict[str, object]:
             reasons[str(r["failure_reason"])] = reasons.get(str(r["failure_reason"]), 0) + 1
     out["failures"] = reasons
     for name in SUMMARY_METRICS:
-        vals = np.array([float(r[name]) for r in rows], dtype=float)  # type: ignore[arg-type]
+        vals = np.array([float(r[name]) for r in rows], dtype=np.float64)
         if name in ("cost", "settling_time"):
             vals = vals[succ]
         elif name == "time_to_failure":

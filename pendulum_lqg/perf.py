@@ -21,6 +21,7 @@ import statistics
 import time
 import tracemalloc
 from collections.abc import Callable
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -58,7 +59,7 @@ def raw_rollout_rate(plant: object, episodes: int, nstep: int, nthread: int, *,
 
 def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None = None,
              repeats: int = 5, memory: bool = False,
-             log: Callable[[str], None] = lambda s: None) -> dict[str, object]:
+             log: Callable[[str], None] = lambda s: None) -> dict[str, Any]:
     plant = load_plant()
     nthread = thread_count(nthread)
     scenario = Scenario(duration=duration)
@@ -90,7 +91,7 @@ def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None
     ratio = statistics.median(pair_ratios)
     out_ratio = statistics.median(c / r for c, r in zip(closed, with_outputs, strict=True))
     raw_med, closed_med = statistics.median(raw), statistics.median(closed)
-    out: dict[str, object] = {
+    out: dict[str, Any] = {
         "episodes": episodes, "duration_s": duration, "nthread": nthread, "repeats": repeats,
         "physics_step_s": plant.timestep, "steps_per_period": k,
         "shards": shard_count(episodes, nthread, "rollout", policy),

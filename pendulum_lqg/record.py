@@ -180,7 +180,7 @@ class VerifyResult:
 
 
 # ---- episode selection ----------------------------------------------------------------------
-def telling_episodes(rows: Sequence[Mapping[str, object]]) -> dict[str, int]:
+def telling_episodes(rows: Sequence[Mapping[str, Any]]) -> dict[str, int]:
     """Pick the episodes worth recording from a sweep's episode rows.
 
     Among the successful episodes, the ``best`` (lowest cost), ``median`` (the lower median by
@@ -202,14 +202,14 @@ def telling_episodes(rows: Sequence[Mapping[str, object]]) -> dict[str, int]:
         if missing:
             raise ConfigError(f"rows[{i}]: missing key {missing[0]!r}; telling_episodes needs "
                               "'episode', 'success' and 'cost'")
-    ok = [r for r in rows if bool(r["success"]) and np.isfinite(float(r["cost"]))]  # type: ignore[arg-type]
-    ok.sort(key=lambda r: (float(r["cost"]), int(r["episode"])))  # type: ignore[arg-type]
+    ok = [r for r in rows if bool(r["success"]) and np.isfinite(float(r["cost"]))]
+    ok.sort(key=lambda r: (float(r["cost"]), int(r["episode"])))
     out: dict[str, int] = {}
     if ok:
-        out["best"] = int(ok[0]["episode"])  # type: ignore[call-overload]
-        out["median"] = int(ok[(len(ok) - 1) // 2]["episode"])  # type: ignore[call-overload]
-        out["worst"] = int(ok[-1]["episode"])  # type: ignore[call-overload]
-    failed = [int(r["episode"]) for r in rows if not bool(r["success"])]  # type: ignore[call-overload]
+        out["best"] = int(ok[0]["episode"])
+        out["median"] = int(ok[(len(ok) - 1) // 2]["episode"])
+        out["worst"] = int(ok[-1]["episode"])
+    failed = [int(r["episode"]) for r in rows if not bool(r["success"])]
     if failed:
         out["first_failure"] = min(failed)
     return out
@@ -338,11 +338,11 @@ def _fmt(value: object) -> str:
     return str(value)
 
 
-def _flatten(data: object, prefix: str = "") -> dict[str, object]:
+def _flatten(data: object, prefix: str = "") -> dict[str, Any]:
     """Nested mappings as ``{"a.b": value}`` (lists stay values)."""
     if not isinstance(data, Mapping):
         return {prefix: data}
-    out: dict[str, object] = {}
+    out: dict[str, Any] = {}
     for k, v in data.items():
         key = f"{prefix}.{k}" if prefix else str(k)
         if isinstance(v, Mapping) and v:
@@ -615,7 +615,7 @@ def _blueprint(prefixes: Sequence[tuple[str, Trajectory, str | None]], *, estima
         middle = rrb.Vertical(*[
             rrb.TimeSeriesView(origin=f"{pre}/state/{n}", name=f"{_SYMBOLS[n]} [{_UNITS[n]}]")
             for n in STATE_NAMES])
-        right_views = [
+        right_views: list[Any] = [
             rrb.TimeSeriesView(origin=f"{pre}/control", name="control u [N] and ±u_max"),
             rrb.TimeSeriesView(origin=f"{pre}/cost", name="running cost J(t)")]
         if estimated:

@@ -31,7 +31,7 @@ import time
 from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from pendulum_lqg import SCHEMA_VERSION, __version__
 from pendulum_lqg.errors import ConfigError
@@ -127,8 +127,8 @@ class ResultsDir:
             self._acquire()
         except PermissionError as exc:
             raise ConfigError(f"out: cannot write into {self.path} ({exc.strerror})") from None
-        record = {"fingerprint": spec.fingerprint(), "name": spec.name, "spec": spec.source,
-                  "versions": versions()}
+        record: dict[str, Any] = {"fingerprint": spec.fingerprint(), "name": spec.name,
+                                  "spec": spec.source, "versions": versions()}
         if resume and old is not None:
             problem = None
             if old.get("fingerprint") != record["fingerprint"]:
@@ -151,7 +151,7 @@ class ResultsDir:
         self._fingerprint = record["fingerprint"]
         atomic_write(spec_file, json.dumps(record, indent=2, sort_keys=True, default=str) + "\n")
 
-    def _read_spec(self) -> dict[str, object] | None:
+    def _read_spec(self) -> dict[str, Any] | None:
         """Our ``spec.json`` as a dict, or ``None`` if missing or not ours."""
         try:
             data = json.loads((self.path / "spec.json").read_text(encoding="utf-8"))
@@ -233,22 +233,22 @@ class ResultsDir:
                 return f"{field}: recorded {record.get(field)!r}, expected {expected[field]!r}"
         return None
 
-    def write_unit(self, unit: WorkUnit, rows: list[dict[str, object]]) -> None:
+    def write_unit(self, unit: WorkUnit, rows: list[dict[str, Any]]) -> None:
         """Write a unit's rows and then its check record (a unit without one is not trusted)."""
         text = rows_to_csv(rows)
         atomic_write(self.units_dir / f"{unit.key}.csv", text)
         record = _unit_record(unit, getattr(self, "_fingerprint", None), text.encode("utf-8"))
         atomic_write(self.units_dir / f"{unit.key}.json", json.dumps(record, sort_keys=True) + "\n")
 
-    def collect(self, spec: ExperimentSpec) -> list[dict[str, object]]:
-        rows: list[dict[str, object]] = []
+    def collect(self, spec: ExperimentSpec) -> list[dict[str, Any]]:
+        rows: list[dict[str, Any]] = []
         for unit in spec.units():
             f = self.units_dir / f"{unit.key}.csv"
             if f.exists():
                 rows.extend(read_csv(f))
         return rows
 
-    def finalize(self, spec: ExperimentSpec, meta: dict[str, object]) -> dict[str, object]:
+    def finalize(self, spec: ExperimentSpec, meta: dict[str, Any]) -> dict[str, Any]:
         """Assemble episodes.csv, summary.json, summary.md (and meta.json); return the summary."""
         rows = self.collect(spec)
         atomic_write(self.path / "episodes.csv",
@@ -267,7 +267,7 @@ def unit_columns(unit: WorkUnit) -> list[str]:
     return ["config", *unit.config.values, *EPISODE_FIELDS]
 
 
-def _unit_record(unit: WorkUnit, fingerprint: str | None, data: bytes) -> dict[str, object]:
+def _unit_record(unit: WorkUnit, fingerprint: str | None, data: bytes) -> dict[str, Any]:
     text = data.decode("utf-8", errors="replace")
     lines = text.splitlines()
     header = next(csv.reader(lines[:1]), []) if lines else []
@@ -290,15 +290,15 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
-def summarize_configs(spec: ExperimentSpec, rows: list[dict[str, object]]) -> dict[str, object]:
-    out: dict[str, object] = {"schema_version": SCHEMA_VERSION, "experiment": spec.name,
+def summarize_configs(spec: ExperimentSpec, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {"schema_version": SCHEMA_VERSION, "experiment": spec.name,
                               "seed": spec.seed,
                               "episodes_per_config": spec.episodes, "configurations": []}
     for cfg in spec.configurations:
         mine = [r for r in rows if r["config"] == cfg.index]
         entry = {"index": cfg.index, "values": cfg.values, "label": cfg.label,
                  "summary": summarize(mine) if mine else None}
-        out["configurations"].append(entry)  # type: ignore[union-attr]
+        out["configurations"].append(entry)
     return out
 
 
@@ -311,16 +311,16 @@ def _fmt(stat: dict[str, float], digits: int = 3) -> str:
     return f"{mean:.{digits}g} ± {se:.2g}"
 
 
-def markdown_table(spec: ExperimentSpec, summary: dict[str, object]) -> str:
+def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
     """The summary as a Markdown table (one row per configuration)."""
-    configs = summary["configurations"]  # type: ignore[index]
+    configs = summary["configurations"]
     keys = list(spec.configurations[0].values) if spec.configurations else []
     head = [*keys, "success [95 % CI]", "J (successes)", "RMS θ [rad]", "max abs θ [rad]",
             "RMS p [m]", "RMS u [N]", "saturated", "RMS θ̂−θ [rad]", "RMS ṗ̂−ṗ [m/s]",
             "failures"]
     lines = [f"**{spec.name}** — {spec.episodes} episodes per configuration, seed {spec.seed}",
              "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for c in configs:  # type: ignore[union-attr]
+    for c in configs:
         s = c["summary"]
         if s is None:
             continue

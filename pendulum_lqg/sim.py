@@ -35,9 +35,10 @@ import copy
 import dataclasses
 import math
 import threading
+from collections.abc import Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import mujoco
 import numpy as np
@@ -879,7 +880,7 @@ class Trajectory:
 class BatchResult:
     """Per-episode metric rows (and trajectories on request) of one batch run."""
 
-    rows: list[dict[str, object]]
+    rows: list[dict[str, Any]]
     trajectories: list[Trajectory] | None = None
 
 
@@ -923,15 +924,15 @@ class _FixedBatch:
     """A policy without ``select``: it keeps its whole original batch; rows of ended episodes get
     zero measurements and their forces are dropped."""
 
-    def __init__(self, policy: object, n: int) -> None:
+    def __init__(self, policy: Any, n: int) -> None:
         self.policy, self.n0, self.alive = policy, n, np.arange(n)
 
     def act(self, y: np.ndarray) -> np.ndarray:
         if self.alive.size == self.n0:
-            return np.asarray(self.policy.act(y), dtype=float).reshape(-1)   # type: ignore[attr-defined]
+            return np.asarray(self.policy.act(y), dtype=np.float64).reshape(-1)
         full = np.zeros((self.n0, y.shape[1]))
         full[self.alive] = y
-        u = np.asarray(self.policy.act(full), dtype=float).reshape(-1)       # type: ignore[attr-defined]
+        u = np.asarray(self.policy.act(full), dtype=np.float64).reshape(-1)
         return u[self.alive]
 
     def select(self, rows: np.ndarray) -> None:
@@ -979,8 +980,8 @@ class _Cancelled(Exception):
     """Another shard failed or the caller was interrupted: stop this one."""
 
 
-def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
-                 episodes: list[int] | np.ndarray, backend: Literal["rollout", "step"] = "rollout",
+def run_episodes(plant: Plant, scenario: Scenario, policy: Any, *, seed: int,
+                 episodes: Iterable[int] | np.ndarray, backend: Literal["rollout", "step"] = "rollout",
                  nthread: int | None = None, trajectory: bool = False,
                  initial_states: np.ndarray | None = None) -> BatchResult:
     """Run episodes ``episodes`` of the run seeded ``seed`` through the closed loop.
@@ -1029,7 +1030,7 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: object, *, seed: int,
     return BatchResult(rows=rows, trajectories=trajectories)
 
 
-def _run_batch(plant: Plant, scenario: Scenario, policy: object, seed: int, episodes: list[int],
+def _run_batch(plant: Plant, scenario: Scenario, policy: Any, seed: int, episodes: list[int],
                backend: Literal["rollout", "step"], nthread: int, trajectory: bool,
                initial_states: np.ndarray | None, stop: threading.Event | None) -> BatchResult:
     """:func:`run_episodes` on one batch (one :class:`Simulator`)."""
@@ -1040,9 +1041,9 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: object, seed: int, epis
     with Simulator(plant, scenario, backend=backend, nthread=nthread) as sim:
         x0 = sim.reset(gens, initial_states=initial_states)
         if scenario.estimate0 == "true":
-            policy.reset(n, x_hat0=x0.copy())   # type: ignore[attr-defined]
+            policy.reset(n, x_hat0=x0.copy())
         else:
-            policy.reset(n)                     # type: ignore[attr-defined]
+            policy.reset(n)
         needs_state = bool(getattr(policy, "needs_state", False))
         can_select = callable(getattr(policy, "select", None))
         if not can_select:             # keep feeding the whole batch; use only the running rows
@@ -1052,7 +1053,7 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: object, seed: int, epis
                 raise _Cancelled
             y = sim.measure()
             x_now = sim.x
-            u = policy.act(x_now if needs_state else y)   # type: ignore[attr-defined]
+            u = policy.act(x_now if needs_state else y)
             x_hat = getattr(policy, "x_hat", None)
             if log is not None:
                 snap = dict(t=sim.t, x=x_now, y=y, u=np.clip(u, -sim.u_max, sim.u_max),
@@ -1063,7 +1064,7 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: object, seed: int, epis
             if res.failed.any():
                 keep = np.nonzero(~res.failed)[0]
                 sim.select(keep)
-                policy.select(keep)                       # type: ignore[attr-defined]
+                policy.select(keep)
                 if keep.size == 0:
                     break
         assert sim.metrics is not None

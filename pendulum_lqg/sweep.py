@@ -64,7 +64,7 @@ class SweepResult:
     """
 
     path: Path
-    summary: dict[str, object] | None
+    summary: dict[str, Any] | None
     units_total: int
     units_run: int
     failures: list[UnitFailure] = field(default_factory=list)
@@ -185,7 +185,7 @@ class terminate_as_interrupt:
             signal.signal(signal.SIGTERM, self._old)
 
 
-Outcome = tuple[WorkUnit, list[dict[str, object]] | None, str | None]
+Outcome = tuple[WorkUnit, list[dict[str, Any]] | None, str | None]
 
 
 def _with_progress(outcomes: Iterable[Outcome], todo: list[WorkUnit], total: int, already: int,
@@ -220,7 +220,7 @@ def _with_progress(outcomes: Iterable[Outcome], todo: list[WorkUnit], total: int
             yield unit, rows, error
 
 
-def recording_name(experiment: str, index: int, values: dict[str, object]) -> str:
+def recording_name(experiment: str, index: int, values: dict[str, Any]) -> str:
     """``lecture_c003_dlqr+kalman_noise_scale1.0.rrd``: the experiment, the configuration index and
     its grid values (a plugin policy by its file or module name), in characters safe for any
     file system."""

@@ -19,6 +19,7 @@ divergence); a region-of-attraction study should raise ``theta_max`` above the d
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -40,7 +41,7 @@ class Evaluation:
     def rate(self) -> float:
         return self.successes / self.n
 
-    def to_dict(self) -> dict[str, object]:
+    def to_dict(self) -> dict[str, Any]:
         lo, hi = wilson_interval(self.successes, self.n)
         return {"theta0": self.theta0, "successes": self.successes, "episodes": self.n,
                 "success_rate": self.rate, "ci95_low": lo, "ci95_high": hi}
