@@ -149,10 +149,11 @@ class Configuration:
 
     def validate(self) -> None:
         """Build the configuration and check it against the (possibly overridden) model."""
-        from pendulum_lqg.linearize import steps_per_period
+        from pendulum_lqg.linearize import check_duration, steps_per_period
 
         scenario, _ = self.build()
         steps_per_period(self.plants(scenario)[1], scenario.control_period)
+        check_duration(scenario.duration, scenario.control_period)
 
 
 @dataclass(frozen=True)

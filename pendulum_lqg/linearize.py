@@ -63,8 +63,26 @@ class DiscreteModel:
         return structure(self.Phi, self.Gamma, self.C, discrete=True)
 
 
+#: Ceiling of the control period T [s]. The cart-pole's unstable pole (≈ 4 rad/s) grows by e⁴ over
+#: one second; far longer periods overflow the designs (e^{AT}) and mean nothing for this problem.
+MAX_CONTROL_PERIOD = 1.0
+#: Ceiling of the physics steps per control period (bounds the per-period work of the loop and of
+#: the composed ``mjd_transitionFD``, whatever the model's timestep).
+MAX_STEPS_PER_PERIOD = 10_000
+#: Ceiling of the control periods per episode (duration / T): keeps an episode finite (10⁸ periods
+#: are ~10⁹ physics steps, hours per episode) and its metrics' counters exact.
+MAX_PERIODS = 10**8
+
+
 def steps_per_period(plant: Plant, dt: float) -> int:
-    """Number of physics steps in one control period; ``dt`` must be a positive multiple of h."""
+    """Number of physics steps in one control period.
+
+    ``dt`` must be a whole number k of physics steps h with ``1 ≤ k ≤``
+    :data:`MAX_STEPS_PER_PERIOD` and ``dt ≤`` :data:`MAX_CONTROL_PERIOD`; otherwise a one-line
+    :class:`ConfigError` naming ``control_period``.
+    """
+    if isinstance(dt, bool) or np.iscomplexobj(dt):
+        raise ConfigError(f"control_period: expected a number of seconds, got {dt!r}")
     try:
         dt = float(dt)
     except (TypeError, ValueError) as exc:
@@ -72,11 +90,36 @@ def steps_per_period(plant: Plant, dt: float) -> int:
     h = plant.timestep
     if not np.isfinite(dt) or dt <= 0:
         raise ConfigError(f"control_period: expected a positive number of seconds, got {dt!r}")
+    if dt > MAX_CONTROL_PERIOD * (1 + 1e-12):
+        raise ConfigError(f"control_period: expected at most {MAX_CONTROL_PERIOD:g} s (the "
+                          f"ceiling), got {dt!r} s")
     k = round(dt / h)
     if k < 1 or abs(k * h - dt) > 1e-9 * max(dt, h):
         raise ConfigError(f"control_period: {dt!r} s is not a positive integer multiple of the "
                           f"physics step {h!r} s")
+    if k > MAX_STEPS_PER_PERIOD:
+        raise ConfigError(f"control_period: expected at most {MAX_STEPS_PER_PERIOD} physics "
+                          f"steps of {h!r} s (the ceiling), got {dt!r} s = {k} steps")
     return int(k)
+
+
+def check_duration(duration: float, control_period: float) -> float:
+    """``duration`` [s] as a float, finite, positive and at most :data:`MAX_PERIODS` control
+    periods long; otherwise a one-line :class:`ConfigError` naming ``duration``."""
+    if isinstance(duration, bool) or not isinstance(duration, int | float | np.integer
+                                                    | np.floating):
+        raise ConfigError(f"duration: expected a finite positive number of seconds, got "
+                          f"{duration!r}")
+    value = float(duration)
+    if not np.isfinite(value) or value <= 0:
+        raise ConfigError(f"duration: expected a finite positive number of seconds, got "
+                          f"{duration!r}")
+    T = float(control_period)
+    if not value / T <= MAX_PERIODS:               # also catches an overflow to inf
+        raise ConfigError(f"duration: expected at most {MAX_PERIODS:.0e} control periods "
+                          f"({MAX_PERIODS * T:g} s at T = {T:g} s; the ceiling), got "
+                          f"{duration!r} s")
+    return value
 
 
 def _equilibrium(plant: Plant) -> mujoco.MjData:

@@ -298,8 +298,12 @@ def build_policy(name: str | None, *, plant: Plant, scenario: Scenario,
     base_dir : folder that relative plugin file paths are taken from (an experiment file's folder)
     context : a prebuilt :class:`PolicyContext` (saves re-linearising for many plugins)
     """
+    from pendulum_lqg.linearize import check_duration
     from pendulum_lqg.policy import DesignSpec, delay_periods, design_policy
 
+    # An episode must stay finite before any design work (Scenario itself checks only that the
+    # duration is positive; see linearize.MAX_PERIODS).
+    check_duration(scenario.duration, scenario.control_period)
     spec = spec or DesignSpec()
     if name is not None and is_plugin_ref(name):
         factory = load_factory(name, base_dir=base_dir)
