@@ -258,6 +258,47 @@ class Plant:
         if m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4:
             raise ConfigError("model: the RK4 integrator is not supported (mjd_transitionFD "
                               "refuses it); use Euler or implicitfast")
+        self._check_contract()
+
+    def _check_contract(self) -> None:
+        """The rest of the model contract (README, "Your own cart-pole model"): joint kinds, a
+        limited track, a limited motor on the slider, the two position sensors. Without these
+        checks a missing ``range`` or ``ctrlrange`` read as a 0 m track or a 0 N motor."""
+        m, path = self.model, self.path
+        jt = mujoco.mjtJoint
+        slider, hinge = m.joint(SLIDER).id, m.joint(HINGE).id
+        for jid, name, kind, word in ((slider, SLIDER, jt.mjJNT_SLIDE, "slide"),
+                                      (hinge, HINGE, jt.mjJNT_HINGE, "hinge")):
+            if m.jnt_type[jid] != kind:
+                raise ConfigError(f"model: {path}: joint {name!r} must be of type \"{word}\"")
+        lo, hi = m.jnt_range[slider]
+        if not m.jnt_limited[slider] or not lo < 0 < hi:
+            raise ConfigError(f"model: {path}: joint {SLIDER!r} needs a range around 0 (the "
+                              f"track ends, e.g. range=\"-2.4 2.4\"); found limited="
+                              f"{bool(m.jnt_limited[slider])}, range=[{lo:g}, {hi:g}]")
+        act = m.actuator(ACTUATOR)
+        if act.trntype[0] != mujoco.mjtTrn.mjTRN_JOINT or act.trnid[0] != slider:
+            raise ConfigError(f"model: {path}: actuator {ACTUATOR!r} must act on the joint "
+                              f"{SLIDER!r}")
+        lo, hi = act.ctrlrange
+        if not m.actuator_ctrllimited[act.id] or not lo < 0 < hi or abs(lo + hi) > 1e-9 * hi:
+            raise ConfigError(f"model: {path}: actuator {ACTUATOR!r} needs a symmetric "
+                              f"ctrlrange (ctrllimited) around 0, e.g. ctrlrange=\"-10 10\"; "
+                              f"found ctrllimited={bool(m.actuator_ctrllimited[act.id])}, "
+                              f"ctrlrange=[{lo:g}, {hi:g}]")
+        if not act.gear[0] > 0:
+            raise ConfigError(f"model: {path}: actuator {ACTUATOR!r} needs a positive gear, "
+                              f"found {act.gear[0]:g}")
+        for sensor, joint in zip(SENSORS, (SLIDER, HINGE), strict=True):
+            sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, sensor)
+            if sid < 0:
+                raise ConfigError(f"model: {path}: no sensor named {sensor!r} (the measured "
+                                  f"y = [p, θ] needs <jointpos name=\"{sensor}\" "
+                                  f"joint=\"{joint}\"/>)")
+            if (m.sensor_type[sid] != mujoco.mjtSensor.mjSENS_JOINTPOS
+                    or m.sensor_objid[sid] != m.joint(joint).id):
+                raise ConfigError(f"model: {path}: sensor {sensor!r} must be "
+                                  f"<jointpos joint=\"{joint}\"/>")
 
     # ---- addresses -------------------------------------------------------------------------
     @cached_property
