@@ -14,10 +14,16 @@ def config_vector(name: str, value: object, n: int, *, nonneg: bool = False,
     Raises :class:`ConfigError` naming ``name``: "x0: expected 4 finite numbers, got …".
     """
     kind = "non-negative " if nonneg else ""
+    items = value if isinstance(value, list | tuple) else [value]
     try:
+        if any(isinstance(v, bool | np.bool_ | str | bytes) for v in items) \
+                or np.iscomplexobj(value):
+            raise TypeError(value)
         arr = np.atleast_1d(np.asarray(value, dtype=float))
     except (TypeError, ValueError) as exc:
         raise ConfigError(f"{name}: expected {n} finite {kind}numbers, got {value!r}") from exc
+    if arr.ndim != 1:                                   # nested lists: [[1, 2], …]
+        raise ConfigError(f"{name}: expected {n} finite {kind}numbers, got {value!r}")
     if arr.size == 1 and n > 1:
         arr = np.full(n, arr[0])
     if arr.shape != (n,) or not np.all(np.isfinite(arr)) or (nonneg and np.any(arr < 0)):

@@ -96,8 +96,8 @@ def _add_design_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--model", default=None, metavar="XML",
                    help="MJCF model file (default: the bundled models/cartpole.xml)")
     g.add_argument("--dt", type=_number, default=0.01, metavar="T",
-                   help="control period T in seconds, a multiple of the model's physics step "
-                        "(default 0.01)")
+                   help="control period T in seconds, a whole number (≤ 10 000) of the model's "
+                        "physics steps and at most 1 s (default 0.01)")
     g.add_argument("--q", type=_floats, default=None, metavar="Q1,..,Q4",
                    help="diagonal of the LQR state weight Q, units of [m⁻², rad⁻², (m/s)⁻², "
                         "(rad/s)⁻²] (default 1,1,1,1)")
@@ -149,7 +149,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=_nonneg_int, default=0,
                    help="the run's seed; episode k draws from episode_seed(seed, k) (default 0)")
     p.add_argument("--duration", type=_number, default=10.0,
-                   help="episode length in s (default 10)")
+                   help="episode length in s, at most 10⁸ control periods (default 10)")
     p.add_argument("--noise-scale", type=_number, default=1.0,
                    help="multiplies both noises' standard deviations (0 = noise-free; default 1); "
                         "the estimators stay designed for the nominal noise")

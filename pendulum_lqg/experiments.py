@@ -56,7 +56,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.noise import NoiseModel
 from pendulum_lqg.plant import ModelOverrides, Plant
 from pendulum_lqg.policy import CONTROLLERS, OBSERVERS, DesignSpec
@@ -151,7 +151,7 @@ class Configuration:
         """Build the configuration and check it against the (possibly overridden) model."""
         from pendulum_lqg.plant import steps_per_period
 
-        scenario, _ = self.build()
+        scenario, _ = self.build()          # the Scenario checks the duration ceiling
         steps_per_period(self.plants(scenario)[1], scenario.control_period)
 
 
@@ -292,6 +292,29 @@ def _model_file(value: object, base_dir: Path | None) -> str | None:
     return str(path.resolve())
 
 
+def _check_name(name: str) -> None:
+    """An experiment name is a folder name under ``results/``: one rule, the results folder's."""
+    from pendulum_lqg.results import check_name
+
+    check_name(name)
+
+
+def _located(exc: PendulumLQGError, base: dict[str, dict[str, object]],
+             values: dict[str, object]) -> PendulumLQGError:
+    """``exc`` with the TOML location of its parameter: ``R: …`` → ``design.R: …`` when the key
+    was given in ``[design]`` (and not by the grid), plus the grid point that failed."""
+    msg = str(exc)
+    name = msg.split(":", 1)[0]
+    if name not in values:
+        for table, entries in base.items():
+            if name in entries:
+                msg = f"{table}.{msg}"
+                break
+    if values:
+        msg += " (grid point " + ", ".join(f"{k}={v!r}" for k, v in values.items()) + ")"
+    return type(exc)(msg)
+
+
 def parse_spec(data: dict[str, object], *, name: str = "experiment",
                base_dir: Path | None = None) -> ExperimentSpec:
     """Validate an experiment mapping (as read from TOML).
@@ -300,16 +323,16 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment",
     from: the experiment file's own folder (then the current folder).
     """
     _check_keys("experiment", data, TOP_KEYS)
-    base = {
-        "scenario": dict(data.get("scenario", {})),  # type: ignore[arg-type]
-        "noise": dict(data.get("noise", {})),  # type: ignore[arg-type]
-        "design": dict(data.get("design", {})),  # type: ignore[arg-type]
-        "model": dict(data.get("model", {})),  # type: ignore[arg-type]
-    }
-    _check_keys("scenario", base["scenario"], SCENARIO_KEYS)
-    _check_keys("noise", base["noise"], NOISE_KEYS)
-    _check_keys("design", base["design"], DESIGN_KEYS)
-    _check_keys("model", base["model"], MODEL_KEYS)
+    for table, known in (("scenario", SCENARIO_KEYS), ("noise", NOISE_KEYS),
+                         ("design", DESIGN_KEYS), ("model", MODEL_KEYS)):
+        _check_keys(table, data.get(table, {}), known)  # type: ignore[arg-type]
+    base = {table: dict(data.get(table, {}))  # type: ignore[call-overload]
+            for table in ("scenario", "noise", "design", "model")}
+    for key in ("name", "description"):
+        if key in data and not isinstance(data[key], str):
+            raise ConfigError(f"{key}: expected a string, got {data[key]!r}")
+    if "name" in data:
+        _check_name(str(data["name"]))
     grid = data.get("grid", {})
     _check_keys("grid", grid, GRID_KEYS)  # type: ignore[arg-type]
     for key, values in grid.items():  # type: ignore[union-attr]
@@ -348,10 +371,13 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment",
     combos = itertools.product(*[grid[k] for k in keys]) if keys else [()]  # type: ignore[index]
     for i, combo in enumerate(combos):
         values = dict(zip(keys, combo, strict=True))
-        tables, plugin = _grid_point(values, base, base_dir)
-        cfg = Configuration(index=i, values=values, plugin=plugin, model_file=model_file,
-                            **tables)
-        cfg.validate()  # every configuration now, not in the middle of a sweep
+        try:
+            tables, plugin = _grid_point(values, base, base_dir)
+            cfg = Configuration(index=i, values=values, plugin=plugin, model_file=model_file,
+                                **tables)
+            cfg.validate()  # every configuration now, not in the middle of a sweep
+        except PendulumLQGError as exc:
+            raise _located(exc, base, values) from exc
         configs.append(cfg)
     return ExperimentSpec(name=str(data.get("name", name)), description=str(
         data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,
@@ -378,10 +404,21 @@ def load_spec(name_or_path: str) -> ExperimentSpec:
         raise ConfigError(f"experiment: no file {name_or_path!r}; known experiments: "
                           + ", ".join(experiment_names()))
     try:
-        data = tomllib.loads(path.read_text())
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"experiment: {path} is not UTF-8 text (TOML must be): byte "
+                          f"{exc.object[exc.start]:#04x} at offset {exc.start}") from exc
+    except OSError as exc:
+        raise ConfigError(f"experiment: cannot read {path}: {exc.strerror or exc}") from exc
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"experiment: {path} is not valid TOML: {exc}") from exc
-    return parse_spec(data, name=path.stem, base_dir=path.resolve().parent)
+        raise ConfigError(f"experiment: {path} is not valid TOML: "
+                          f"{' '.join(str(exc).split())}") from exc
+    try:
+        return parse_spec(data, name=path.stem, base_dir=path.resolve().parent)
+    except PendulumLQGError as exc:       # every message names the file it came from
+        raise type(exc)(f"{exc} (in {path})") from exc
 
 
 def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, object]]:

@@ -7,6 +7,8 @@ is bounded here, and each bound is checked before any work starts, with a one-li
 
 from __future__ import annotations
 
+import numpy as np
+
 from pendulum_lqg.errors import ConfigError
 
 #: ``run`` keeps every episode row in memory (and prints them with ``--json``); larger studies go
@@ -32,4 +34,37 @@ def check_at_most(where: str, value: int, ceiling: int, why: str) -> int:
     """``value`` if ≤ ``ceiling``; else a one-line error naming ``where`` and saying ``why``."""
     if value > ceiling:
         raise ConfigError(f"{where}: at most {ceiling:,} ({why}), got {value:,}")
+    return value
+
+
+#: Ceiling of the control period T [s]. The cart-pole's unstable pole (≈ 4 rad/s) grows by e⁴ over
+#: one second; far longer periods overflow the designs (e^{AT}) and mean nothing for this problem.
+MAX_CONTROL_PERIOD = 1.0
+#: Ceiling of the physics steps per control period (bounds the per-period work of the loop and of
+#: the composed ``mjd_transitionFD``, whatever the model's timestep).
+MAX_STEPS_PER_PERIOD = 10_000
+#: Ceiling of the control periods per episode (duration / T): keeps an episode finite (10⁸ periods
+#: are ~10⁹ physics steps, hours per episode) and its metrics' counters exact.
+MAX_PERIODS = 10**8
+#: Ceiling of a measurement or actuator delay in control periods (a ring buffer of that many slots
+#: per episode).
+MAX_DELAY_PERIODS = 10_000
+
+
+def check_duration(duration: float, control_period: float) -> float:
+    """``duration`` [s] as a float, finite, positive and at most :data:`MAX_PERIODS` control
+    periods long; otherwise a one-line :class:`ConfigError` naming ``duration``."""
+    if isinstance(duration, bool) or not isinstance(duration, int | float | np.integer
+                                                    | np.floating):
+        raise ConfigError(f"duration: expected a finite positive number of seconds, got "
+                          f"{duration!r}")
+    value = float(duration)
+    if not np.isfinite(value) or value <= 0:
+        raise ConfigError(f"duration: expected a finite positive number of seconds, got "
+                          f"{duration!r}")
+    T = float(control_period)
+    if not value / T <= MAX_PERIODS:               # also catches an overflow to inf
+        raise ConfigError(f"duration: expected at most {MAX_PERIODS:.0e} control periods "
+                          f"({MAX_PERIODS * T:g} s at T = {T:g} s; the ceiling), got "
+                          f"{duration!r} s")
     return value

@@ -19,6 +19,7 @@ import mujoco
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.limits import MAX_CONTROL_PERIOD, MAX_STEPS_PER_PERIOD
 
 STATE_NAMES: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")
 STATE_LABELS: tuple[str, ...] = ("cart position p [m]", "pole angle θ [rad]",
@@ -258,6 +259,47 @@ class Plant:
         if m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4:
             raise ConfigError("model: the RK4 integrator is not supported (mjd_transitionFD "
                               "refuses it); use Euler or implicitfast")
+        self._check_contract()
+
+    def _check_contract(self) -> None:
+        """The rest of the model contract (README, "Your own cart-pole model"): joint kinds, a
+        limited track, a limited motor on the slider, the two position sensors. Without these
+        checks a missing ``range`` or ``ctrlrange`` read as a 0 m track or a 0 N motor."""
+        m, path = self.model, self.path
+        jt = mujoco.mjtJoint
+        slider, hinge = m.joint(SLIDER).id, m.joint(HINGE).id
+        for jid, name, kind, word in ((slider, SLIDER, jt.mjJNT_SLIDE, "slide"),
+                                      (hinge, HINGE, jt.mjJNT_HINGE, "hinge")):
+            if m.jnt_type[jid] != kind:
+                raise ConfigError(f"model: {path}: joint {name!r} must be of type \"{word}\"")
+        lo, hi = m.jnt_range[slider]
+        if not m.jnt_limited[slider] or not lo < 0 < hi:
+            raise ConfigError(f"model: {path}: joint {SLIDER!r} needs a range around 0 (the "
+                              f"track ends, e.g. range=\"-2.4 2.4\"); found limited="
+                              f"{bool(m.jnt_limited[slider])}, range=[{lo:g}, {hi:g}]")
+        act = m.actuator(ACTUATOR)
+        if act.trntype[0] != mujoco.mjtTrn.mjTRN_JOINT or act.trnid[0] != slider:
+            raise ConfigError(f"model: {path}: actuator {ACTUATOR!r} must act on the joint "
+                              f"{SLIDER!r}")
+        lo, hi = act.ctrlrange
+        if not m.actuator_ctrllimited[act.id] or not lo < 0 < hi or abs(lo + hi) > 1e-9 * hi:
+            raise ConfigError(f"model: {path}: actuator {ACTUATOR!r} needs a symmetric "
+                              f"ctrlrange (ctrllimited) around 0, e.g. ctrlrange=\"-10 10\"; "
+                              f"found ctrllimited={bool(m.actuator_ctrllimited[act.id])}, "
+                              f"ctrlrange=[{lo:g}, {hi:g}]")
+        if not act.gear[0] > 0:
+            raise ConfigError(f"model: {path}: actuator {ACTUATOR!r} needs a positive gear, "
+                              f"found {act.gear[0]:g}")
+        for sensor, joint in zip(SENSORS, (SLIDER, HINGE), strict=True):
+            sid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, sensor)
+            if sid < 0:
+                raise ConfigError(f"model: {path}: no sensor named {sensor!r} (the measured "
+                                  f"y = [p, θ] needs <jointpos name=\"{sensor}\" "
+                                  f"joint=\"{joint}\"/>)")
+            if (m.sensor_type[sid] != mujoco.mjtSensor.mjSENS_JOINTPOS
+                    or m.sensor_objid[sid] != m.joint(joint).id):
+                raise ConfigError(f"model: {path}: sensor {sensor!r} must be "
+                                  f"<jointpos joint=\"{joint}\"/>")
 
     # ---- addresses -------------------------------------------------------------------------
     @cached_property
@@ -390,10 +432,15 @@ class Plant:
 
 
 def steps_per_period(plant: Plant, dt: float) -> int:
-    """Number of physics steps in one control period; ``dt`` must be a positive multiple of h.
+    """Number of physics steps in one control period (with the plant, not the linearisation: the
+    simulation core imports no design code).
 
-    Lives with the plant (not the linearisation) so the simulation core imports no design code.
+    ``dt`` must be a whole number k of physics steps h with ``1 ≤ k ≤``
+    :data:`MAX_STEPS_PER_PERIOD` and ``dt ≤`` :data:`MAX_CONTROL_PERIOD`; otherwise a one-line
+    :class:`ConfigError` naming ``control_period``.
     """
+    if isinstance(dt, bool) or np.iscomplexobj(dt):
+        raise ConfigError(f"control_period: expected a number of seconds, got {dt!r}")
     try:
         dt = float(dt)
     except (TypeError, ValueError) as exc:
@@ -401,8 +448,14 @@ def steps_per_period(plant: Plant, dt: float) -> int:
     h = plant.timestep
     if not np.isfinite(dt) or dt <= 0:
         raise ConfigError(f"control_period: expected a positive number of seconds, got {dt!r}")
+    if dt > MAX_CONTROL_PERIOD * (1 + 1e-12):
+        raise ConfigError(f"control_period: expected at most {MAX_CONTROL_PERIOD:g} s (the "
+                          f"ceiling), got {dt!r} s")
     k = round(dt / h)
     if k < 1 or abs(k * h - dt) > 1e-9 * max(dt, h):
         raise ConfigError(f"control_period: {dt!r} s is not a positive integer multiple of the "
                           f"physics step {h!r} s")
+    if k > MAX_STEPS_PER_PERIOD:
+        raise ConfigError(f"control_period: expected at most {MAX_STEPS_PER_PERIOD} physics "
+                          f"steps of {h!r} s (the ceiling), got {dt!r} s = {k} steps")
     return int(k)

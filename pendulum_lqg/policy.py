@@ -99,6 +99,9 @@ class DesignSpec:
                               f"{self.discretization!r}")
         for name in ("Q", "M0"):             # diagonals of 4×4 matrices
             object.__setattr__(self, name, config_vector(name, getattr(self, name), 4, nonneg=True))
+        if isinstance(self.R, bool) or not isinstance(self.R, int | float | np.integer
+                                                      | np.floating):
+            raise ConfigError(f"R: expected a finite positive number, got {self.R!r}")
         r = float(self.R)
         if not np.isfinite(r) or r <= 0:
             raise ConfigError(f"R: expected a finite positive number, got {self.R!r}")

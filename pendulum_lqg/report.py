@@ -47,6 +47,77 @@ EST_STATES = (("rms_est_err_p", "p [m]"), ("rms_est_err_theta", "θ [rad]"),
               ("rms_est_err_p_dot", "ṗ [m/s]"), ("rms_est_err_theta_dot", "θ̇ [rad/s]"))
 
 
+_MISSING = object()
+_NUMBER = (int, float)
+
+
+def _kind(kind: type | tuple[type, ...]) -> str:
+    names = {dict: "an object", list: "a list", str: "a string", int: "an integer",
+             float: "a number", bool: "true/false"}
+    kinds = kind if isinstance(kind, tuple) else (kind,)
+    if set(kinds) == {int, float}:
+        return "a number"
+    return " or ".join(names.get(k, k.__name__) for k in kinds)
+
+
+def read_json(path: Path) -> dict[str, Any]:
+    """A results JSON file as a dict; a missing, non-UTF-8, invalid or non-object file is one
+    :class:`ConfigError` line naming the file."""
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise ConfigError(f"results: {path} is missing") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"results: {path} is not UTF-8 text (byte {exc.object[exc.start]:#04x} "
+                          f"at offset {exc.start}); the file is corrupt") from exc
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"results: {path} is not valid JSON ({exc.msg} at line {exc.lineno}, "
+                          f"column {exc.colno}); the file is corrupt") from exc
+    if not isinstance(data, dict):
+        raise ConfigError(f"results: {path}: expected a JSON object, got {type(data).__name__}")
+    return data
+
+
+def field(data: dict[str, Any], key: str, kind: type | tuple[type, ...], path: Path, *,
+          default: object = _MISSING, where: str = "") -> Any:
+    """``data[key]`` checked to be of ``kind`` (bools are not numbers); errors name the file."""
+    value = data.get(key, default)
+    label = f"{where}{key}"
+    if value is _MISSING:
+        raise ConfigError(f"results: {path}: key {label!r} is missing")
+    kinds = kind if isinstance(kind, tuple) else (kind,)
+    if value is default and default is not _MISSING:
+        return value
+    if (isinstance(value, bool) and bool not in kinds) or not isinstance(value, kinds):
+        shown = repr(value)
+        shown = shown if len(shown) <= 60 else shown[:57] + "..."
+        raise ConfigError(f"results: {path}: key {label!r}: expected {_kind(kind)}, got {shown}")
+    return value
+
+
+def records(data: dict[str, Any], key: str, path: Path,
+            fields: dict[str, type | tuple[type, ...]]) -> list[dict[str, Any]]:
+    """``data[key]``: a list of objects, each with ``fields`` of the given kinds."""
+    rows = field(data, key, list, path)
+    for i, row in enumerate(rows):
+        if not isinstance(row, dict):
+            raise ConfigError(f"results: {path}: key '{key}[{i}]': expected an object, got "
+                              f"{type(row).__name__}")
+        for name, kind in fields.items():
+            field(row, name, kind, path, where=f"{key}[{i}].")
+    return rows
+
+
+def _numbers(data: dict[str, Any], key: str, path: Path, n: int, where: str) -> list[float]:
+    vals = field(data, key, list, path, where=where)
+    if len(vals) != n or any(isinstance(v, bool) or not isinstance(v, _NUMBER) for v in vals):
+        raise ConfigError(f"results: {path}: key '{where}{key}': expected {n} numbers, got "
+                          f"{vals!r}")
+    return [float(v) for v in vals]
+
+
 def _plt() -> Any:
     import matplotlib
 
@@ -88,9 +159,19 @@ def make_report(paths: list[Path], out: Path) -> Path:
                 "Made by `pendulum-lqg report` from the data files of: "
                 + ", ".join(f"`{f}`" for f in folders) + ".", ""]
     for folder in folders:
-        spec = json.loads((folder / "spec.json").read_text())
-        src = spec.get("spec", {})
-        name = spec.get("name", folder.name)
+        spec_path = folder / "spec.json"
+        spec = read_json(spec_path)
+        src = field(spec, "spec", dict, spec_path, default={})
+        name = field(spec, "name", str, spec_path, default=folder.name)
+        if not name or any(c in name for c in "/\\\0") or name in (".", ".."):
+            raise ConfigError(f"results: {spec_path}: key 'name': expected a plain name, got "
+                              f"{name!r}")
+        field(src, "description", str, spec_path, default="", where="spec.")
+        field(src, "seed", int, spec_path, default=0, where="spec.")
+        field(src, "study", str, spec_path, default=None, where="spec.")
+        grid = field(src, "grid", dict, spec_path, default={}, where="spec.")
+        for key in grid:
+            field(grid, key, list, spec_path, where="spec.grid.")
         sections += [f"## {name}", "", str(src.get("description", "")), "",
                      f"Seed {src.get('seed', 0)}; data: `{folder}`.", ""]
         if not (folder / "summary.md").is_file():
@@ -491,8 +572,14 @@ def _margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple
         for ax, key in zip(axes, ("phase_margin_deg", "min_return_difference", "disk_margin"),
                            strict=True):
             ax.plot(q, [float(r[key]) for r in sub], marker="o", ms=3, label=meas)  # type: ignore[arg-type]
-    summ = json.loads((folder / "summary.json").read_text())
-    lq = next(r for r in summ["loops"] if r["loop"].startswith("LQ ("))
+    summ_path = folder / "summary.json"
+    summ = read_json(summ_path)
+    loops_all = records(summ, "loops", summ_path, {
+        "loop": str, "phase_margin_deg": _NUMBER, "min_return_difference": _NUMBER,
+        "disk_margin": _NUMBER, "control_period": _NUMBER})
+    lq = next((r for r in loops_all if r["loop"].startswith("LQ (")), None)
+    if lq is None:
+        raise ConfigError(f"results: {summ_path}: key 'loops' has no 'LQ (…)' loop")
     for ax, key, title in zip(axes, ("phase_margin_deg", "min_return_difference", "disk_margin"),
                               ("phase margin [deg]", "min abs(1 + L(jω))", "disk margin α"),
                               strict=True):
@@ -505,7 +592,11 @@ def _margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple
     fig.suptitle(f"{name}: loop transfer recovery")
     figs.append(("loop transfer recovery", _save(fig, out, f"{name}_ltr.png", plt)))
 
-    loops = [r for r in summ["loops"] if float(r["control_period"]) > 0]
+    loops = [r for r in loops_all if float(r["control_period"]) > 0]
+    for i, r in enumerate(loops):
+        field(r, "policy", str, summ_path, where=f"loops[{i}].")
+        field(r, "closed_loop_stable", bool, summ_path, where=f"loops[{i}].")
+        field(r, "discretization", str, summ_path, default="", where=f"loops[{i}].")
     if loops:
         fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
         keyf = lambda r: (r["policy"], r.get("discretization", ""))  # noqa: E731
@@ -527,9 +618,15 @@ def _margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple
 
 # ---- region of attraction ------------------------------------------------------------------------
 def _roa_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[str, str]]:
-    summ = json.loads((folder / "summary.json").read_text())
-    prm = summ["params"]
-    cfgs = summ["configurations"]
+    summ_path = folder / "summary.json"
+    summ = read_json(summ_path)
+    prm = field(summ, "params", dict, summ_path)
+    _numbers(prm, "map_theta", summ_path, 3, "params.")
+    _numbers(prm, "map_theta_dot", summ_path, 3, "params.")
+    field(prm, "level", _NUMBER, summ_path, where="params.")
+    field(summ, "episodes_per_batch", int, summ_path)
+    cfgs = records(summ, "configurations", summ_path, {
+        "index": int, "policy": str, "estimate0": str, "theta_star": _NUMBER})
     policies = list(dict.fromkeys(c["policy"] for c in cfgs))
     est = list(dict.fromkeys(c["estimate0"] for c in cfgs))
     t_lo, t_hi, _ = prm["map_theta"]

@@ -46,6 +46,7 @@ from mujoco import rollout as mj_rollout
 
 from pendulum_lqg._config import config_vector
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
+from pendulum_lqg.limits import MAX_CONTROL_PERIOD, MAX_DELAY_PERIODS, check_duration
 from pendulum_lqg.metrics import (
     FAIL_DIVERGED,
     FAIL_POLE,
@@ -126,6 +127,10 @@ class Scenario:
                     or not np.isfinite(value) or value <= 0:
                 raise ConfigError(f"{name}: expected a finite positive number, got {value!r}")
             object.__setattr__(self, name, float(value))
+        check_duration(self.duration, self.control_period)     # at most MAX_PERIODS periods
+        if self.control_period > MAX_CONTROL_PERIOD * (1 + 1e-12):
+            raise ConfigError(f"control_period: expected at most {MAX_CONTROL_PERIOD:g} s (the "
+                              f"ceiling), got {self.control_period!r} s")
         object.__setattr__(self, "x0", config_vector("x0", self.x0, 4))
         object.__setattr__(self, "x0_std", config_vector("x0_std", self.x0_std, 4, nonneg=True))
         object.__setattr__(self, "cost_Q", config_vector("cost_Q", self.cost_Q, 4, nonneg=True))
@@ -155,6 +160,10 @@ class Scenario:
             object.__setattr__(self, name, float(value))
         for name in ("measurement_delay", "actuator_delay"):
             periods = getattr(self, name) / self.control_period
+            if not periods <= MAX_DELAY_PERIODS:
+                raise ConfigError(f"{name}: expected at most {MAX_DELAY_PERIODS:,} control "
+                                  f"periods (the ceiling; each is a ring-buffer slot per "
+                                  f"episode), got {getattr(self, name)!r} s")
             if abs(periods - round(periods)) > 1e-9 * max(1.0, periods):
                 raise ConfigError(f"{name}: expected a whole number of control periods "
                                   f"(T = {self.control_period:g} s), got {getattr(self, name)!r} s")

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import as_matrix, as_square
+from pendulum_lqg.design._checks import as_matrix, as_square, design_function
 from pendulum_lqg.errors import ShapeError
 
 
@@ -57,6 +57,7 @@ class DelayAugmented:
     actuator_delay: int
 
 
+@design_function()
 def augment_delays(Phi: ArrayLike, Gamma: ArrayLike, C: ArrayLike, *, measurement_delay: int,
                    actuator_delay: int) -> DelayAugmented:
     """Augment ``(Φ, Γ, C)`` with a measurement and an actuator delay line (see the module).

@@ -10,9 +10,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import expm
 
-from pendulum_lqg.design._checks import as_matrix, as_positive, as_square, as_weight
+from pendulum_lqg.design._checks import as_matrix, as_positive, as_square, as_weight, design_function
 
 
+@design_function('A and dt')
 def zoh(A: ArrayLike, B: ArrayLike, dt: float) -> tuple[np.ndarray, np.ndarray]:
     r"""Zero-order-hold discretisation.
 
@@ -40,6 +41,7 @@ def zoh(A: ArrayLike, B: ArrayLike, dt: float) -> tuple[np.ndarray, np.ndarray]:
     return E[:n, :n], E[:n, n:]
 
 
+@design_function('A and dt')
 def euler(A: ArrayLike, B: ArrayLike, dt: float) -> tuple[np.ndarray, np.ndarray]:
     r"""Forward-Euler discretisation :math:`\Phi \approx I + AT`, :math:`\Gamma \approx BT`.
 
@@ -52,6 +54,7 @@ def euler(A: ArrayLike, B: ArrayLike, dt: float) -> tuple[np.ndarray, np.ndarray
     return np.eye(n) + A * dt, B * dt
 
 
+@design_function('A, W and dt')
 def process_noise_covariance(A: ArrayLike, G: ArrayLike, W: ArrayLike, dt: float) -> np.ndarray:
     r"""Covariance of the state increment over one period from continuous white noise.
 
@@ -85,6 +88,7 @@ def process_noise_covariance(A: ArrayLike, G: ArrayLike, W: ArrayLike, dt: float
     return 0.5 * (Qd + Qd.T)
 
 
+@design_function('A, Q, R and dt')
 def sampled_cost(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, dt: float,
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     r"""Exact discrete weights of a continuous quadratic cost under zero-order hold.
@@ -119,6 +123,7 @@ def sampled_cost(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, dt: flo
     return W[:n, :n], W[n:, n:], W[:n, n:]
 
 
+@design_function('the poles and dt')
 def c2d_poles(poles: ArrayLike, dt: float) -> np.ndarray:
     """Map continuous poles to the z-plane, ``z = e^{sT}``."""
     dt = as_positive("dt", dt)

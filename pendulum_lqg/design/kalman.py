@@ -18,7 +18,9 @@ from pendulum_lqg.design._checks import (
     as_matrix,
     as_square,
     as_weight,
+    design_function,
     require_detectable,
+    require_noise_reaches_marginal_modes,
     require_stabilizable,
     require_stable,
 )
@@ -74,6 +76,7 @@ def _observer_data(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: Ar
     return A, G, C, W, V
 
 
+@design_function('W and V')
 def kalman(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike) -> KalmanResult:
     r"""Continuous steady-state Kalman–Bucy filter (python-control / MATLAB ``lqe``).
 
@@ -96,6 +99,7 @@ def kalman(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike)
     A, G, C, W, V = _observer_data(A, G, C, W, V, ("A", "G"))
     require_detectable(A, C, discrete=False, names="(A, C)")
     GWG = G @ W @ G.T
+    require_noise_reaches_marginal_modes(A, GWG, discrete=False, names="A")
     S = solve_continuous_are(A.T, C.T, GWG, V)
     S = 0.5 * (S + S.T)
     L = S @ C.T @ np.linalg.inv(V)
@@ -104,6 +108,7 @@ def kalman(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike)
     return KalmanResult(L=L, P=S, poles=poles)
 
 
+@design_function('W and V')
 def dkalman(Phi: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike,
             ) -> DKalmanResult:
     r"""Discrete steady-state Kalman filter; filter (current-estimate) and predictor gains.
@@ -132,6 +137,7 @@ def dkalman(Phi: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLi
     Phi, G, C, W, V = _observer_data(Phi, G, C, W, V, ("Phi", "G"))
     require_detectable(Phi, C, discrete=True, names="(Phi, C)")
     GWG = G @ W @ G.T
+    require_noise_reaches_marginal_modes(Phi, GWG, discrete=True, names="Phi")
     M = solve_discrete_are(Phi.T, C.T, GWG, V)
     M = 0.5 * (M + M.T)
     S = C @ M @ C.T + V                              # innovation covariance
@@ -161,6 +167,7 @@ class TimeVaryingKalmanGains:
     P: np.ndarray
 
 
+@design_function('W, V and M0')
 def kalman_tv(Phi: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike,
               M0: ArrayLike, steps: int) -> TimeVaryingKalmanGains:
     r"""Time-varying discrete Kalman filter gains from an initial covariance.
@@ -192,6 +199,7 @@ def kalman_tv(Phi: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: Array
     return TimeVaryingKalmanGains(L=Ls, M=Ms, P=Ps)
 
 
+@design_function()
 def require_noise_reaches_unstable_modes(A: ArrayLike, G: ArrayLike, W: ArrayLike, *,
                                          discrete: bool) -> None:
     """Optional check that ``(A, G W^½)`` is stabilisable (strictly positive steady covariance)."""

@@ -12,7 +12,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import as_loop
+from pendulum_lqg.design._checks import as_loop, design_function
 from pendulum_lqg.errors import DesignError
 
 
@@ -46,6 +46,7 @@ def _match_error(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(cost[rows, cols]))
 
 
+@design_function()
 def lqg(A: ArrayLike, B: ArrayLike, C: ArrayLike, K: ArrayLike, L: ArrayLike, *,
         form: Literal["continuous", "predictor", "current"] = "continuous") -> LQGResult:
     r"""Assemble the LQG closed loop and check the separation principle.

@@ -15,6 +15,8 @@ from pendulum_lqg.design._checks import (
     as_matrix,
     as_square,
     as_weight,
+    design_function,
+    require_cost_sees_marginal_modes,
     require_stabilizable,
     require_stable,
 )
@@ -56,6 +58,7 @@ def _weights(Q: ArrayLike, R: ArrayLike, N: ArrayLike | None, n: int, m: int,
     return Q, R, N
 
 
+@design_function('Q and R')
 def lqr(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, *,
         N: ArrayLike | None = None) -> LQRResult:
     r"""Continuous infinite-horizon LQR.
@@ -88,6 +91,7 @@ def lqr(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, *,
     A, B = _plant(A, B, ("A", "B"))
     Q, R, N = _weights(Q, R, N, *B.shape)
     require_stabilizable(A, B, discrete=False, names="(A, B)")
+    require_cost_sees_marginal_modes(A, B, Q, R, N, discrete=False, names="A")
     K, P, _ = control.lqr(A, B, Q, R, N)
     K, P = np.asarray(K), np.asarray(P)
     poles = np.linalg.eigvals(A - B @ K)
@@ -95,6 +99,7 @@ def lqr(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, *,
     return LQRResult(K=K, P=P, poles=poles, discrete=False)
 
 
+@design_function('Q and R')
 def dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: ArrayLike, *,
          N: ArrayLike | None = None, alpha: float = 1.0) -> LQRResult:
     r"""Discrete infinite-horizon LQR, optionally with a prescribed degree of stability.
@@ -123,6 +128,8 @@ def dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: ArrayLike, *,
     Phi, Gamma = _plant(Phi, Gamma, ("Phi", "Gamma"))
     Q, R, N = _weights(Q, R, N, *Gamma.shape)
     try:
+        if isinstance(alpha, bool) or np.iscomplexobj(alpha):
+            raise TypeError(alpha)
         alpha = float(alpha)
     except (TypeError, ValueError) as exc:
         raise DesignError(f"alpha: expected a number ≥ 1, got {alpha!r}") from exc
@@ -131,6 +138,8 @@ def dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: ArrayLike, *,
     Pa, Ga = alpha * Phi, alpha * Gamma
     require_stabilizable(Pa, Ga, discrete=True,
                          names="(Phi, Gamma)" if alpha == 1.0 else "(alpha·Phi, alpha·Gamma)")
+    require_cost_sees_marginal_modes(Pa, Ga, Q, R, N, discrete=True,
+                                     names="Phi" if alpha == 1.0 else "alpha·Phi")
     K, P, _ = control.dlqr(Pa, Ga, Q, R, N)
     K, P = np.asarray(K), np.asarray(P)
     require_stable(np.linalg.eigvals(Pa - Ga @ K), discrete=True, what="dlqr")
@@ -166,6 +175,7 @@ class FiniteHorizonLQR:
         return x, u
 
 
+@design_function('Q, R and S')
 def finite_horizon_dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: ArrayLike,
                         S: ArrayLike, horizon: int) -> FiniteHorizonLQR:
     r"""Finite-horizon discrete LQR by the backward Riccati recursion (Bryson–Ho sweep).
@@ -208,6 +218,7 @@ def finite_horizon_dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: Array
     return FiniteHorizonLQR(K=K, P=P)
 
 
+@design_function()
 def bryson(max_state: ArrayLike, max_input: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     r"""Bryson's rule: :math:`Q_{ii} = 1/x_{i,max}^2`, :math:`R_{jj} = 1/u_{j,max}^2`.
 

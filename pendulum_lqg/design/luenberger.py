@@ -9,7 +9,7 @@ import control
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import as_matrix, as_poles, as_positive, as_square
+from pendulum_lqg.design._checks import as_matrix, as_poles, as_positive, as_square, design_function
 from pendulum_lqg.errors import DesignError
 
 #: The project's default continuous-time observer poles (deliberately slow; see THEORY.md §3).
@@ -55,6 +55,7 @@ def _place(A: np.ndarray, C: np.ndarray, poles: np.ndarray, what: str) -> np.nda
     return L_r @ U_r.T
 
 
+@design_function('the poles')
 def luenberger(A: ArrayLike, C: ArrayLike, poles: ArrayLike) -> ObserverResult:
     r"""Continuous full-order Luenberger observer :math:`\dot{\hat x} = A\hat x + Bu + L(y - C\hat x)`.
 
@@ -81,6 +82,7 @@ def luenberger(A: ArrayLike, C: ArrayLike, poles: ArrayLike) -> ObserverResult:
     return ObserverResult(L=L, poles=np.linalg.eigvals(A - L @ C), form="continuous")
 
 
+@design_function('the poles')
 def dluenberger(Phi: ArrayLike, C: ArrayLike, poles: ArrayLike, *,
                 form: Literal["current", "predictor"] = "current",
                 dt: float | None = None) -> ObserverResult:

@@ -25,6 +25,7 @@ from pendulum_lqg.design._checks import (
     as_poles,
     as_square,
     as_weight,
+    design_function,
     require_detectable,
 )
 from pendulum_lqg.design.luenberger import ObserverResult, _place
@@ -36,7 +37,14 @@ LMI_TOLERANCE = 1e-9
 LMI_EPS = 1e-9
 
 
+def _real_number(name: str, value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise DesignError(f"{name}: expected a real number, got {value!r}")
+    return float(value)
+
+
 # ---- Ackermann ---------------------------------------------------------------------------------------
+@design_function('the poles')
 def ackermann(A: ArrayLike, C: ArrayLike, poles: ArrayLike) -> ObserverResult:
     r"""Single-output observer gain by Ackermann's formula.
 
@@ -143,6 +151,7 @@ def _reduced(A: ArrayLike, B: ArrayLike, C: ArrayLike, poles: ArrayLike, form: s
                                 poles=np.linalg.eigvals(F), form=form)
 
 
+@design_function('the poles')
 def reduced_order_observer(A: ArrayLike, B: ArrayLike, C: ArrayLike, poles: ArrayLike,
                            ) -> ReducedOrderObserver:
     r"""Continuous reduced-order Luenberger observer (Luenberger 1964; THEORY.md §3).
@@ -162,6 +171,7 @@ def reduced_order_observer(A: ArrayLike, B: ArrayLike, C: ArrayLike, poles: Arra
     return _reduced(A, B, C, poles, "continuous")
 
 
+@design_function('the poles')
 def dreduced_order_observer(Phi: ArrayLike, Gamma: ArrayLike, C: ArrayLike, poles: ArrayLike,
                             ) -> ReducedOrderObserver:
     r"""Discrete reduced-order observer: the same algebra on ``(Φ, Γ)``, z-plane ``poles``.
@@ -216,6 +226,7 @@ def _sym(X: object) -> object:
     return 0.5 * (X + X.T)  # type: ignore[operator, attr-defined]
 
 
+@design_function()
 def lmi_observer(A: ArrayLike, C: ArrayLike, *, decay: float) -> LMIObserverResult:
     r"""Observer gain with every error pole at Re λ ≤ −α, from the Lyapunov LMI.
 
@@ -236,7 +247,7 @@ def lmi_observer(A: ArrayLike, C: ArrayLike, *, decay: float) -> LMIObserverResu
     A = as_square("A", A)
     n = A.shape[0]
     C = as_matrix("C", C, (None, n))
-    alpha = float(decay)
+    alpha = _real_number("decay", decay)
     if not np.isfinite(alpha) or alpha < 0:
         raise DesignError(f"decay: expected a finite rate α ≥ 0, got {decay!r}")
     P = cp.Variable((n, n), symmetric=True)
@@ -279,6 +290,7 @@ def _sqrtm(S: np.ndarray) -> np.ndarray:
     return (U * np.sqrt(np.clip(lam, 0.0, None))) @ U.T
 
 
+@design_function('W and V')
 def h2_filter(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike,
               ) -> LMIObserverResult:
     r"""The H₂-optimal filter by LMIs — which is the Kalman–Bucy filter.
@@ -320,6 +332,7 @@ def h2_filter(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLi
                              bound=float(prob.value) / k, status=status)
 
 
+@design_function('W and V')
 def hinf_filter(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike, *,
                 gamma: float | None = None) -> LMIObserverResult:
     r"""The H∞ filter by LMIs: a gain bounding the worst-case gain from noise to estimation error.
@@ -356,7 +369,7 @@ def hinf_filter(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: Array
         g2 = cp.Variable(nonneg=True)
         objective = cp.Minimize(g2)
     else:
-        g = float(gamma)
+        g = _real_number("gamma", gamma)
         if not np.isfinite(g) or g <= 0:
             raise DesignError(f"gamma: expected a finite positive bound, got {gamma!r}")
         g2 = g * g * k                      # the bound of the scaled problem

@@ -7,9 +7,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import as_matrix, as_square, unstable_modes
+from pendulum_lqg.design._checks import as_matrix, as_square, design_function, unstable_modes
 
 
+@design_function()
 def controllability_matrix(A: ArrayLike, B: ArrayLike) -> np.ndarray:
     """``[B, AB, …, Aⁿ⁻¹B]`` (n, n·m)."""
     A = as_square("A", A)
@@ -21,6 +22,7 @@ def controllability_matrix(A: ArrayLike, B: ArrayLike) -> np.ndarray:
     return np.hstack(blocks)
 
 
+@design_function()
 def observability_matrix(A: ArrayLike, C: ArrayLike) -> np.ndarray:
     """``[C; CA; …; CAⁿ⁻¹]`` (n·p, n)."""
     A = as_square("A", A)
@@ -28,6 +30,7 @@ def observability_matrix(A: ArrayLike, C: ArrayLike) -> np.ndarray:
     return controllability_matrix(A.T, C.T).T
 
 
+@design_function()
 def pbh_rank_deficient(A: ArrayLike, B: ArrayLike, *, tol: float = 1e-9) -> list[complex]:
     """Eigenvalues λ of A with ``rank [A − λI, B] < n`` (uncontrollable modes, PBH test)."""
     A = as_square("A", A)
@@ -73,6 +76,7 @@ class StructureReport:
         return self.observability_rank == self.n
 
 
+@design_function()
 def structure(A: ArrayLike, B: ArrayLike, C: ArrayLike, *, discrete: bool = False,
               ) -> StructureReport:
     """Rank and PBH tests of controllability, observability, stabilisability, detectability."""
