@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
 
 
-def config_vector(name: str, value: object, n: int, *, nonneg: bool = False,
+def config_vector(name: str, value: Any, n: int, *, nonneg: bool = False,
                   ) -> tuple[float, ...]:
     """``value`` as a tuple of ``n`` finite floats; a single number is repeated ``n`` times.
 

@@ -13,7 +13,7 @@ import math
 import re
 import sys
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, NoReturn
 
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS, PLANTS
 
@@ -35,7 +35,7 @@ class _Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = re.compile(r"^-\.?\d")
 
-    def error(self, message: str) -> None:  # one line, status 2, no traceback
+    def error(self, message: str) -> NoReturn:  # one line, status 2, no traceback
         self.print_usage(sys.stderr)
         print(f"error: {message}", file=sys.stderr)
         raise SystemExit(EXIT_USAGE)
@@ -429,7 +429,7 @@ def _print_design(d: dict[str, Any], plant: Any) -> None:
 def cmd_run(args: argparse.Namespace) -> int:
     from pendulum_lqg.limits import MAX_RECORDED_EPISODES, MAX_RUN_EPISODES, check_at_most
     from pendulum_lqg.metrics import summarize
-    from pendulum_lqg.plant import load_plant
+    from pendulum_lqg.plant import Randomization, load_plant
     from pendulum_lqg.plugins import build_policy, is_plugin_ref, split_builtin
     from pendulum_lqg.sim import Scenario
 
@@ -443,7 +443,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                         plant=args.plant,
                         measurement_delay=args.measurement_delay,
                         actuator_delay=args.actuator_delay, dropout=args.dropout,
-                        actuator_tau=args.actuator_tau, randomize=_randomize(args.randomize))
+                        actuator_tau=args.actuator_tau,
+                        randomize=Randomization.from_mapping(_randomize(args.randomize)))
     plugin = is_plugin_ref(name)
     spec = _spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
     policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)
@@ -561,7 +562,7 @@ def _run_in_batches(plant: Any, scenario: Any, policy: Any, args: argparse.Names
     steps = scenario.n_periods * max(1, round(scenario.control_period / plant.timestep))
     size = max(1, min(limits.RUN_BATCH, 20_000_000 // max(steps, 1)))    # ≤ ~2·10⁷ physics steps each
     total = args.episodes
-    rows: list[dict[str, object]] = []
+    rows: list[dict[str, Any]] = []
     trajectories: list[Any] | None = [] if trajectory else None
     t0 = last = time.perf_counter()
     for start in range(0, total, size):

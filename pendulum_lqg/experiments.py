@@ -55,11 +55,15 @@ import json
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.noise import NoiseModel
 from pendulum_lqg.plant import ModelOverrides, Plant
 from pendulum_lqg.policy import CONTROLLERS, OBSERVERS, DesignSpec
+
+if TYPE_CHECKING:
+    from pendulum_lqg.sim import Scenario
 
 TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "model_file", "scenario", "noise",
             "design", "model", "grid", "study", "margins", "roa")
@@ -88,7 +92,7 @@ def experiments_dir() -> Path:
     return data_dir("experiments")
 
 
-def _check_keys(where: str, table: dict[str, object], known: tuple[str, ...]) -> None:
+def _check_keys(where: str, table: dict[str, Any], known: tuple[str, ...]) -> None:
     if not isinstance(table, dict):
         raise ConfigError(f"{where}: expected a table, got {type(table).__name__}")
     unknown = sorted(set(table) - set(known))
@@ -106,11 +110,11 @@ class Configuration:
     """
 
     index: int
-    values: dict[str, object]
-    scenario: dict[str, object]
-    noise: dict[str, object]
-    design: dict[str, object]
-    model: dict[str, object]
+    values: dict[str, Any]
+    scenario: dict[str, Any]
+    noise: dict[str, Any]
+    design: dict[str, Any]
+    model: dict[str, Any]
     #: a user's policy plugin (``MODULE:ATTR`` or an absolute ``file.py:ATTR``) instead of the
     #: built-in ``design`` controller/observer
     plugin: str | None = None
@@ -121,19 +125,19 @@ class Configuration:
     def label(self) -> str:
         return ", ".join(f"{k}={v}" for k, v in self.values.items()) or "default"
 
-    def build(self) -> tuple[object, DesignSpec]:
+    def build(self) -> tuple[Scenario, DesignSpec]:
         """``(Scenario, DesignSpec)`` of this configuration (validated)."""
         from pendulum_lqg.sim import Scenario
 
-        noise = NoiseModel(**self.noise)  # type: ignore[arg-type]
+        noise = NoiseModel(**self.noise)
         overrides = ModelOverrides.from_mapping(self.model)
-        scenario = Scenario(noise=noise, overrides=overrides, **self.scenario)  # type: ignore[arg-type]
-        return scenario, DesignSpec(**self.design)  # type: ignore[arg-type]
+        scenario = Scenario(noise=noise, overrides=overrides, **self.scenario)
+        return scenario, DesignSpec(**self.design)
 
-    def to_dict(self) -> dict[str, object]:
+    def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
 
-    def plants(self, scenario: object | None = None) -> tuple[Plant, Plant]:
+    def plants(self, scenario: Scenario | None = None) -> tuple[Plant, Plant]:
         """``(nominal, simulated)``: the model the designs believe in (the XML as it is) and the
         one simulated (with the scenario's mismatch overrides; the same object when there are
         none)."""
@@ -141,7 +145,7 @@ class Configuration:
 
         if scenario is None:
             scenario, _ = self.build()
-        overrides = scenario.overrides  # type: ignore[attr-defined]
+        overrides = scenario.overrides
         nominal = load_plant(self.model_file)
         simulated = nominal if overrides.is_empty() else load_plant(self.model_file,
                                                                     overrides=overrides)
@@ -165,9 +169,9 @@ class ExperimentSpec:
     seed: int
     chunk: int
     configurations: tuple[Configuration, ...]
-    source: dict[str, object] = field(default_factory=dict)
+    source: dict[str, Any] = field(default_factory=dict)
     study: str | None = None
-    study_params: dict[str, object] = field(default_factory=dict)
+    study_params: dict[str, Any] = field(default_factory=dict)
     #: folder of the experiment file (relative plugin paths), not part of the fingerprint
     base_dir: Path | None = None
 
@@ -232,9 +236,9 @@ def _as_int(where: str, value: object, minimum: int) -> int:
     return value
 
 
-def _grid_point(values: dict[str, object], base: dict[str, dict[str, object]],
+def _grid_point(values: dict[str, Any], base: dict[str, dict[str, Any]],
                 base_dir: Path | None = None,
-                ) -> tuple[dict[str, dict[str, object]], str | None]:
+                ) -> tuple[dict[str, dict[str, Any]], str | None]:
     """The resolved tables of one grid point, and its plugin reference (``None``: built-in)."""
     from pendulum_lqg.plugins import is_plugin_ref, load_factory, resolve_ref, split_builtin
 
@@ -242,12 +246,12 @@ def _grid_point(values: dict[str, object], base: dict[str, dict[str, object]],
     plugin = None
     for key, value in values.items():
         if key == "policy":
-            if is_plugin_ref(value):  # type: ignore[arg-type]
+            if is_plugin_ref(value):
                 load_factory(value, base_dir=base_dir)   # importable now, not mid-sweep
-                plugin = resolve_ref(value, base_dir)    # type: ignore[arg-type]
+                plugin = resolve_ref(value, base_dir)
                 continue
             try:
-                ctrl, obs = split_builtin(value)         # type: ignore[arg-type]
+                ctrl, obs = split_builtin(value)
             except ConfigError:
                 raise ConfigError(f"grid.policy: expected 'controller+observer' (e.g. "
                                   f"'dlqr+kalman') or a plugin 'MODULE:ATTR' / "
@@ -268,7 +272,7 @@ def _grid_point(values: dict[str, object], base: dict[str, dict[str, object]],
                                   f"{kind!r}")
             tables["scenario"][f"{kind}_delay"] = value
         elif key == "theta0":
-            x0 = list(tables["scenario"].get("x0", (0.0, 0.1, 0.0, 0.0)))  # type: ignore[arg-type]
+            x0 = list(tables["scenario"].get("x0", (0.0, 0.1, 0.0, 0.0)))
             x0[1] = value
             tables["scenario"]["x0"] = x0
         else:  # model scales
@@ -299,8 +303,8 @@ def _check_name(name: str) -> None:
     check_name(name)
 
 
-def _located(exc: PendulumLQGError, base: dict[str, dict[str, object]],
-             values: dict[str, object]) -> PendulumLQGError:
+def _located(exc: PendulumLQGError, base: dict[str, dict[str, Any]],
+             values: dict[str, Any]) -> PendulumLQGError:
     """``exc`` with the TOML location of its parameter: ``R: …`` → ``design.R: …`` when the key
     was given in ``[design]`` (and not by the grid), plus the grid point that failed."""
     msg = str(exc)
@@ -315,7 +319,7 @@ def _located(exc: PendulumLQGError, base: dict[str, dict[str, object]],
     return type(exc)(msg)
 
 
-def parse_spec(data: dict[str, object], *, name: str = "experiment",
+def parse_spec(data: dict[str, Any], *, name: str = "experiment",
                base_dir: Path | None = None) -> ExperimentSpec:
     """Validate an experiment mapping (as read from TOML).
 
@@ -325,8 +329,8 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment",
     _check_keys("experiment", data, TOP_KEYS)
     for table, known in (("scenario", SCENARIO_KEYS), ("noise", NOISE_KEYS),
                          ("design", DESIGN_KEYS), ("model", MODEL_KEYS)):
-        _check_keys(table, data.get(table, {}), known)  # type: ignore[arg-type]
-    base = {table: dict(data.get(table, {}))  # type: ignore[call-overload]
+        _check_keys(table, data.get(table, {}), known)
+    base = {table: dict(data.get(table, {}))
             for table in ("scenario", "noise", "design", "model")}
     for key in ("name", "description"):
         if key in data and not isinstance(data[key], str):
@@ -334,11 +338,11 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment",
     if "name" in data:
         _check_name(str(data["name"]))
     grid = data.get("grid", {})
-    _check_keys("grid", grid, GRID_KEYS)  # type: ignore[arg-type]
-    for key, values in grid.items():  # type: ignore[union-attr]
+    _check_keys("grid", grid, GRID_KEYS)
+    for key, values in grid.items():
         if not isinstance(values, list) or not values:
             raise ConfigError(f"grid.{key}: expected a non-empty list, got {values!r}")
-    for key, values in grid.items():  # type: ignore[union-attr]
+    for key, values in grid.items():
         if key == "controller":
             bad = [v for v in values if v not in CONTROLLERS]
         elif key == "observer":
@@ -348,17 +352,17 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment",
         if bad:
             known = CONTROLLERS if key == "controller" else OBSERVERS
             raise ConfigError(f"grid.{key}: unknown {bad[0]!r}; expected one of " + ", ".join(known))
-    if ("delay" in grid) != ("delay_kind" in grid):  # type: ignore[operator]
+    if ("delay" in grid) != ("delay_kind" in grid):
         raise ConfigError("grid.delay: give delay and delay_kind together (delay_kind = "
                           "['measurement', 'actuator'] says which delay the values set)")
     study = data.get("study")
-    study_params: dict[str, object] = {}
+    study_params: dict[str, Any] = {}
     if study is not None:
         if study not in STUDIES:
             raise ConfigError(f"study: unknown {study!r}; expected one of " + ", ".join(STUDIES))
         from pendulum_lqg.analysis.studies import parse_study_params
 
-        study_params = parse_study_params(str(study), data.get(str(study), {}))  # type: ignore[arg-type]
+        study_params = parse_study_params(str(study), data.get(str(study), {}))
     for other in STUDIES:
         if other in data and other != study:
             raise ConfigError(f"{other}: a [{other}] table needs study = {other!r}")
@@ -366,9 +370,9 @@ def parse_spec(data: dict[str, object], *, name: str = "experiment",
     episodes = _as_int("episodes", data.get("episodes", 100), 1)
     seed = _as_int("seed", data.get("seed", 0), 0)
     chunk = _as_int("chunk", data.get("chunk", 250), 1)
-    keys = list(grid)  # type: ignore[arg-type]
+    keys = list(grid)
     configs = []
-    combos = itertools.product(*[grid[k] for k in keys]) if keys else [()]  # type: ignore[index]
+    combos = itertools.product(*[grid[k] for k in keys]) if keys else [()]
     for i, combo in enumerate(combos):
         values = dict(zip(keys, combo, strict=True))
         try:
@@ -421,7 +425,7 @@ def load_spec(name_or_path: str) -> ExperimentSpec:
         raise type(exc)(f"{exc} (in {path})") from exc
 
 
-def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, object]]:
+def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, Any]]:
     """Run one work unit; rows carry the configuration's grid values and index."""
     from pendulum_lqg.plugins import build_policy
     from pendulum_lqg.sim import run_episodes
@@ -437,5 +441,5 @@ def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, ob
     return out
 
 
-def _flat(values: dict[str, object]) -> dict[str, object]:
+def _flat(values: dict[str, Any]) -> dict[str, Any]:
     return {k: (json.dumps(v) if isinstance(v, list | dict) else v) for k, v in values.items()}

@@ -156,7 +156,7 @@ class Randomization:
         if unknown:
             raise ConfigError(f"randomize: unknown key {unknown[0]!r}; known keys: "
                               + ", ".join(RANDOMIZABLE))
-        return cls(**data)  # type: ignore[arg-type]
+        return cls(**data)
 
     def is_empty(self) -> bool:
         return all(getattr(self, name) is None for name in RANDOMIZABLE)
@@ -197,7 +197,11 @@ def _apply_overrides(spec: mujoco.MjSpec, ov: ModelOverrides) -> None:
                            else "pole_length_scale")
         start, end = np.array(pole.fromto[:3]), np.array(pole.fromto[3:])
         old = float(np.linalg.norm(end - start))
-        new = ov.pole_length if ov.pole_length is not None else old * ov.pole_length_scale
+        if ov.pole_length is not None:
+            new = ov.pole_length
+        else:
+            assert ov.pole_length_scale is not None          # one of the two, by the branch
+            new = old * ov.pole_length_scale
         end = start + (end - start) * (new / old)
         pole.fromto = np.concatenate([start, end])
         tip = spec.site(POLE_TIP)
@@ -383,9 +387,9 @@ class Plant:
         """Pole moment of inertia about its centre of mass, around the hinge axis [kg m²]."""
         body = self.model.body(POLE_BODY)
         # Principal inertia rotated into the body frame, then projected on the hinge axis.
-        rot = np.zeros(9)
-        mujoco.mju_quat2Mat(rot, body.iquat)
-        rot = rot.reshape(3, 3)
+        flat = np.zeros(9)
+        mujoco.mju_quat2Mat(flat, body.iquat)
+        rot = flat.reshape(3, 3)
         inertia = rot @ np.diag(body.inertia) @ rot.T
         axis = self.model.joint(HINGE).axis
         return float(axis @ inertia @ axis)

@@ -36,7 +36,7 @@ import importlib
 import importlib.util
 import inspect
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -229,11 +229,12 @@ class PluginPolicy:
             raise PluginError(f"policy {name!r}: needs_state must be True or False, got {needs!r}")
         self.needs_state = bool(needs)
         info = getattr(inner, "info", None)
-        self.info: dict[str, object] = dict(info) if isinstance(info, dict) else {}
+        self.info: dict[str, Any] = dict(info) if isinstance(info, dict) else {}
         if callable(getattr(inner, "select", None)):
             self.select = self._select
         #: the plugin's promise that its rows are independent (the core may shard the batch)
         self.independent_rows = getattr(inner, "independent_rows", False) is True
+        params: Mapping[str, Any]
         try:
             params = inspect.signature(inner.reset).parameters    # type: ignore[attr-defined]
         except (TypeError, ValueError):

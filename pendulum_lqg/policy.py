@@ -29,7 +29,7 @@ Observers
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import ClassVar, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from scipy.linalg import expm
@@ -151,7 +151,7 @@ class Policy:
     u_max: float
     name: str
     x_hat0: np.ndarray = field(default_factory=lambda: np.zeros(4))
-    info: dict[str, object] = field(default_factory=dict)
+    info: dict[str, Any] = field(default_factory=dict)
 
     @property
     def needs_state(self) -> bool:
@@ -237,7 +237,7 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
     else:
         Phi, Gamma = design.euler(A, B, dt)
     Q, R = spec.Q_matrix, spec.R_matrix
-    info: dict[str, object] = {"A": A, "B": B, "C": C, "Phi": Phi, "Gamma": Gamma, "dt": dt,
+    info: dict[str, Any] = {"A": A, "B": B, "C": C, "Phi": Phi, "Gamma": Gamma, "dt": dt,
                                "Q": Q, "R": R}
 
     if spec.controller == "lqr":
@@ -320,7 +320,7 @@ def delay_periods(scenario: object) -> tuple[int, int]:
 
 
 def design_all(plant: Plant, control_period: float, noise: NoiseModel,
-               spec: DesignSpec | None = None) -> dict[str, object]:
+               spec: DesignSpec | None = None) -> dict[str, Any]:
     """Every design of the project for one plant and period (what ``pendulum-lqg design`` prints).
 
     Returns plain arrays: the linearisation (``A, B, C, D``), the ZOH and ``mjd_transitionFD``
@@ -342,7 +342,7 @@ def design_all(plant: Plant, control_period: float, noise: NoiseModel,
     Qd, Rd, Nd = design.sampled_cost(A, B, Q, R, dt)
     G, W = noise_design_matrices(lin, noise, dt)
     Qd_noise = per_sample_process_covariance(lin, noise, dt)
-    out: dict[str, object] = {
+    out: dict[str, Any] = {
         "linear": lin, "zoh": zoh_model, "transition_fd": fd_model,
         "structure": lin.structure(), "structure_discrete": zoh_model.structure(),
         "open_loop_poles": np.linalg.eigvals(A),

@@ -207,7 +207,7 @@ def _save(fig: Any, out: Path, fname: str, plt: Any) -> str:
 
 
 # ---- grids ---------------------------------------------------------------------------------------
-def _read_rows(folder: Path) -> list[dict[str, object]]:
+def _read_rows(folder: Path) -> list[dict[str, Any]]:
     from pendulum_lqg.results import read_csv
 
     path = folder / "episodes.csv"
@@ -216,18 +216,18 @@ def _read_rows(folder: Path) -> list[dict[str, object]]:
     return read_csv(path)
 
 
-def _series_label(row: dict[str, object], keys: list[str]) -> str:
+def _series_label(row: dict[str, Any], keys: list[str]) -> str:
     return " ".join(str(row[k]) for k in keys)
 
 
-def _group(rows: list[dict[str, object]], keys: list[str]) -> dict[tuple, list[dict[str, object]]]:
-    out: dict[tuple, list[dict[str, object]]] = {}
+def _group(rows: list[dict[str, Any]], keys: list[str]) -> dict[tuple, list[dict[str, Any]]]:
+    out: dict[tuple, list[dict[str, Any]]] = {}
     for r in rows:
         out.setdefault(tuple(r[k] for k in keys), []).append(r)
     return out
 
 
-def _success_curve(rows: list[dict[str, object]], x: str) -> tuple[np.ndarray, ...]:
+def _success_curve(rows: list[dict[str, Any]], x: str) -> tuple[np.ndarray, ...]:
     by_x = _group(rows, [x])
     xs = np.array(sorted(k[0] for k in by_x), dtype=float)
     rate, lo, hi = [], [], []
@@ -241,14 +241,14 @@ def _success_curve(rows: list[dict[str, object]], x: str) -> tuple[np.ndarray, .
     return xs, np.array(rate), np.array(lo), np.array(hi)
 
 
-def _metric_curve(rows: list[dict[str, object]], x: str, metric: str, *, successes_only: bool,
+def _metric_curve(rows: list[dict[str, Any]], x: str, metric: str, *, successes_only: bool,
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     by_x = _group(rows, [x])
     xs = np.array(sorted(k[0] for k in by_x), dtype=float)
     mean, se = [], []
     for xv in xs:
         grp = by_x.get((xv,)) or by_x[(int(xv),)]
-        vals = np.array([float(r[metric]) for r in grp  # type: ignore[arg-type]
+        vals = np.array([float(r[metric]) for r in grp
                          if not successes_only or bool(r["success"])])
         vals = vals[np.isfinite(vals)]
         mean.append(vals.mean() if vals.size else np.nan)
@@ -309,7 +309,7 @@ def _grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: 
         ax.set_xlabel(LABELS.get(x, x))
         ax.set_ylim(-0.03, 1.03)
         if x in LOG_KEYS:
-            _log_x(ax, [float(r[x]) for r in sub])  # type: ignore[arg-type]
+            _log_x(ax, [float(r[x]) for r in sub])
         if facets:
             ax.set_title(", ".join(f"{k} = {v}" for k, v in zip(facets, fv, strict=True)))
     for ax in list(axes.flat)[len(facet_vals):]:
@@ -340,7 +340,7 @@ def _grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: 
         figs.append(("cost vs control period", _save(fig, out, f"{name}_cost_vs_T.png", plt)))
 
     has_est = any(np.isfinite(float(r["rms_est_err_theta"])) and float(r["rms_est_err_theta"]) > 0
-                  for r in rows)  # type: ignore[arg-type]
+                  for r in rows)
     if has_est and x == "noise_scale":
         fig, axes = plt.subplots(2, 2, figsize=(12, 8))
         for ax, (metric, label) in zip(axes.flat, EST_STATES, strict=True):
@@ -350,7 +350,7 @@ def _grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: 
                     continue          # true-state policies have no estimation error
                 ax.errorbar(xs, m, yerr=se, marker="o", ms=4, capsize=2,
                             label=" ".join(map(str, key)))
-            _log_x(ax, [float(r[x]) for r in rows])  # type: ignore[arg-type]
+            _log_x(ax, [float(r[x]) for r in rows])
             ax.set_yscale("log")
             ax.set_xlabel(LABELS[x])
             ax.set_title(f"RMS estimation error, {label}")
@@ -368,8 +368,8 @@ def _grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: 
 TOLERANCE_LEVEL = 0.95
 
 
-def tolerated_delays(rows: list[dict[str, object]], series: list[str], *,
-                     level: float = TOLERANCE_LEVEL) -> list[dict[str, object]]:
+def tolerated_delays(rows: list[dict[str, Any]], series: list[str], *,
+                     level: float = TOLERANCE_LEVEL) -> list[dict[str, Any]]:
     """The largest delay each policy tolerates, per kind of delay: the largest grid value ``d``
     with a success rate ≥ ``level`` at ``d`` and at every smaller delay of the grid (``nan`` if
     not even the smallest), with the success and its 95 % Wilson interval there."""
@@ -389,7 +389,7 @@ def tolerated_delays(rows: list[dict[str, object]], series: list[str], *,
     return out
 
 
-def _delay_figures(rows: list[dict[str, object]], out: Path, name: str, series: list[str],
+def _delay_figures(rows: list[dict[str, Any]], out: Path, name: str, series: list[str],
                    plt: Any) -> list[tuple[str, str]]:
     """Success (Wilson bands) and mean J vs delay, a column per kind of delay."""
     kinds = sorted({str(r["delay_kind"]) for r in rows}, reverse=True)   # measurement first
@@ -419,7 +419,7 @@ def _delay_figures(rows: list[dict[str, object]], out: Path, name: str, series: 
     return figs
 
 
-def _delay_table(rows: list[dict[str, object]], series: list[str]) -> list[str]:
+def _delay_table(rows: list[dict[str, Any]], series: list[str]) -> list[str]:
     """Markdown table of :func:`tolerated_delays`."""
     lines = [f"Largest delay tolerated at ≥ {TOLERANCE_LEVEL:.0%} success (at that delay and every "
              "smaller one of the grid; 95 % Wilson interval):", "",
@@ -430,27 +430,27 @@ def _delay_table(rows: list[dict[str, object]], series: list[str]) -> list[str]:
         if d != d:
             lines.append(f"| {t['policy']} | {t['delay_kind']} | none | – | – |")
             continue
-        lo, hi = t["ci95"]  # type: ignore[misc]
+        lo, hi = t["ci95"]
         nxt = ("–" if t["next_delay"] != t["next_delay"]
-               else f"{1e3 * float(t['next_delay']):.0f} ms: {float(t['next_success']):.1%}")  # type: ignore[arg-type]
-        lines.append(f"| {t['policy']} | {t['delay_kind']} | {1e3 * float(d):.0f} | "  # type: ignore[arg-type]
-                     f"{float(t['success']):.1%} [{lo:.1%}, {hi:.1%}] | {nxt} |")  # type: ignore[arg-type]
+               else f"{1e3 * float(t['next_delay']):.0f} ms: {float(t['next_success']):.1%}")
+        lines.append(f"| {t['policy']} | {t['delay_kind']} | {1e3 * float(d):.0f} | "
+                     f"{float(t['success']):.1%} [{lo:.1%}, {hi:.1%}] | {nxt} |")
     return [*lines, ""]
 
 
-def _cost_boxes(rows: list[dict[str, object]], out: Path, name: str, series: list[str],
+def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[str],
                 at: tuple[str, float | None] | None, plt: Any) -> str:
     """Box plots of the cost of successful episodes per series (per x value when there are few)."""
     groups = _group(rows, series)
     if at is not None:
         xk, xv = at
-        xs = sorted({float(r[xk]) for r in rows})  # type: ignore[arg-type]
+        xs = sorted({float(r[xk]) for r in rows})
         if xv is None or xv not in xs:
             xs = xs if len(xs) <= 4 else [xs[0], xs[len(xs) // 2], xs[-1]]
         else:
             xs = [xv]
     else:
-        xk, xs = "", [None]
+        xk, xs = "", [None]  # type: ignore[list-item]   # one panel, no grid value
     fig, axes = plt.subplots(1, len(xs), figsize=(2.0 + 4.2 * len(xs), 1.2 + 0.36 * len(groups)),
                              squeeze=False, sharey=True)
     from matplotlib import ticker
@@ -459,8 +459,8 @@ def _cost_boxes(rows: list[dict[str, object]], out: Path, name: str, series: lis
     for ax, xv in zip(axes[0], xs, strict=True):     # horizontal boxes: one readable line each
         data, labels = [], []
         for key, grp in sorted(groups.items(), reverse=True):
-            c = [float(r["cost"]) for r in grp  # type: ignore[arg-type]
-                 if bool(r["success"]) and (xv is None or float(r[xk]) == xv)]  # type: ignore[arg-type]
+            c = [float(r["cost"]) for r in grp
+                 if bool(r["success"]) and (xv is None or float(r[xk]) == xv)]
             data.append(c if c else [np.nan])
             labels.append(" ".join(f"{n} {v}" if n not in ("policy", "discretization") else str(v)
                                    for n, v in zip(names or series, key, strict=False)))
@@ -477,12 +477,12 @@ def _cost_boxes(rows: list[dict[str, object]], out: Path, name: str, series: lis
     return _save(fig, out, f"{name}_cost_distribution.png", plt)
 
 
-def _mismatch_figures(rows: list[dict[str, object]], out: Path, name: str, series: list[str],
+def _mismatch_figures(rows: list[dict[str, Any]], out: Path, name: str, series: list[str],
                       plt: Any) -> list[tuple[str, str]]:
     fig, axes = plt.subplots(2, 2, figsize=(10, 7))
     for col, (x, other) in enumerate((("pole_mass_scale", "pole_length_scale"),
                                       ("pole_length_scale", "pole_mass_scale"))):
-        sub = [r for r in rows if float(r[other]) == 1.0]  # type: ignore[arg-type]
+        sub = [r for r in rows if float(r[other]) == 1.0]
         for key, grp in sorted(_group(sub, series).items()):
             xs, rate, lo, hi = _success_curve(grp, x)
             line, = axes[0][col].plot(xs, rate, marker="o", ms=3, label=" ".join(map(str, key)))
@@ -503,8 +503,8 @@ def _mismatch_figures(rows: list[dict[str, object]], out: Path, name: str, serie
     figs = [("mismatch curves", _save(fig, out, f"{name}_curves.png", plt))]
 
     groups = sorted(_group(rows, series).items())
-    ms = sorted({float(r["pole_mass_scale"]) for r in rows})  # type: ignore[arg-type]
-    ls = sorted({float(r["pole_length_scale"]) for r in rows})  # type: ignore[arg-type]
+    ms = sorted({float(r["pole_mass_scale"]) for r in rows})
+    ls = sorted({float(r["pole_length_scale"]) for r in rows})
     ncol = min(len(groups), 2)
     nrow = -(-len(groups) // ncol)
     fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.4 * nrow), squeeze=False)
@@ -592,20 +592,24 @@ def _margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple
     fig.suptitle(f"{name}: loop transfer recovery")
     figs.append(("loop transfer recovery", _save(fig, out, f"{name}_ltr.png", plt)))
 
-    loops = [r for r in loops_all if float(r["control_period"]) > 0]
+    loops: list[dict[str, Any]] = [r for r in loops_all if float(r["control_period"]) > 0]
     for i, r in enumerate(loops):
         field(r, "policy", str, summ_path, where=f"loops[{i}].")
         field(r, "closed_loop_stable", bool, summ_path, where=f"loops[{i}].")
         field(r, "discretization", str, summ_path, default="", where=f"loops[{i}].")
     if loops:
         fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
-        keyf = lambda r: (r["policy"], r.get("discretization", ""))  # noqa: E731
-        for key in sorted({keyf(r) for r in loops}):
-            sub = sorted((r for r in loops if keyf(r) == key), key=lambda r: r["control_period"])
-            T = [float(r["control_period"]) for r in sub]
+
+        def keyf(r: dict[str, Any]) -> tuple[str, str]:
+            return str(r["policy"]), str(r.get("discretization", ""))
+
+        for group in sorted({keyf(r) for r in loops}):
+            members = sorted((r for r in loops if keyf(r) == group),
+                             key=lambda r: float(r["control_period"]))
+            T = [float(r["control_period"]) for r in members]
             for ax, m in zip(axes, ("phase_margin_deg", "disk_margin"), strict=True):
-                vals = [float(r[m]) if r["closed_loop_stable"] else np.nan for r in sub]
-                ax.plot(T, vals, marker="o", ms=3, label=" ".join(key))
+                vals = [float(r[m]) if r["closed_loop_stable"] else np.nan for r in members]
+                ax.plot(T, vals, marker="o", ms=3, label=" ".join(group))
         for ax, title in zip(axes, ("phase margin [deg] (blank: unstable)", "disk margin α"),
                              strict=True):
             ax.set_xlabel("control period T [s]")
@@ -642,11 +646,11 @@ def _roa_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[str
         if not mine:
             ax.set_visible(False)
             continue
-        ths = sorted({float(r["theta0"]) for r in mine})  # type: ignore[arg-type]
-        tds = sorted({float(r["theta_dot0"]) for r in mine})  # type: ignore[arg-type]
+        ths = sorted({float(r["theta0"]) for r in mine})
+        tds = sorted({float(r["theta_dot0"]) for r in mine})
         Z = np.full((len(tds), len(ths)), np.nan)
         for r in mine:
-            Z[tds.index(float(r["theta_dot0"])), ths.index(float(r["theta0"]))] = (  # type: ignore[arg-type]
+            Z[tds.index(float(r["theta_dot0"])), ths.index(float(r["theta0"]))] = (
                 (bool(r["survived"]) + bool(r["recovered"])) / 2)
         ax.imshow(Z, origin="lower", extent=(t_lo, t_hi, d_lo, d_hi),
                   aspect="auto", cmap="RdYlGn", vmin=0, vmax=1)

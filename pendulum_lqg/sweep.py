@@ -264,7 +264,7 @@ def record_telling_episodes(spec: ExperimentSpec, out: ResultsDir, record_dir: P
                                   "seed": spec.seed, "telling_episodes": picks,
                                   "scenario": scenario.to_dict(),
                                   "design": None if cfg.plugin else dataclasses.asdict(dspec)}
-        record_episodes(res.trajectories, plant=simulated, scenario=scenario, policy=policy,
+        record_episodes(res.trajectories or [], plant=simulated, scenario=scenario, policy=policy,
                         config=config, path=path, labels=picks)
         written.append(path)
         if log is not None:

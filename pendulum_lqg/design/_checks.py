@@ -211,7 +211,7 @@ def as_positive(name: str, value: float) -> float:
     if isinstance(value, bool) or np.iscomplexobj(value):
         raise DesignError(f"{name}: expected a positive real number, got {value!r}")
     try:
-        v = float(value)  # type: ignore[arg-type]
+        v = float(value)
     except (TypeError, ValueError) as exc:
         raise DesignError(f"{name}: expected a positive number, got {value!r}") from exc
     if not np.isfinite(v) or v <= 0:

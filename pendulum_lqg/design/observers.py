@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -222,8 +223,8 @@ def _solve(problem: object, what: str) -> str:
     return status
 
 
-def _sym(X: object) -> object:
-    return 0.5 * (X + X.T)  # type: ignore[operator, attr-defined]
+def _sym(X: Any) -> Any:
+    return 0.5 * (X + X.T)
 
 
 @design_function()
@@ -372,7 +373,7 @@ def hinf_filter(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: Array
         g = _real_number("gamma", gamma)
         if not np.isfinite(g) or g <= 0:
             raise DesignError(f"gamma: expected a finite positive bound, got {gamma!r}")
-        g2 = g * g * k                      # the bound of the scaled problem
+        g2 = g * g * k  # type: ignore[assignment]   # a number here, a cvxpy Variable above
         objective = cp.Minimize(cp.norm(Y, "fro"))
     M = cp.bmat([[A.T @ P + P @ A - C.T @ Y.T - Y @ C + np.eye(n), P @ Gw, -Y @ Vh],
                  [(P @ Gw).T, -g2 * np.eye(q), np.zeros((q, p))],
@@ -382,6 +383,6 @@ def hinf_filter(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: Array
     status = _solve(prob, "hinf_filter")
     Pv = np.asarray(P.value)
     L = np.linalg.solve(Pv, np.asarray(Y.value))
-    bound = float(np.sqrt(g2.value / k)) if gamma is None else float(gamma)  # type: ignore[union-attr]
+    bound = float(np.sqrt(float(g2.value) / k)) if gamma is None else float(gamma)  # type: ignore[arg-type]
     return LMIObserverResult(L=L, poles=np.linalg.eigvals(A - L @ C), P=Pv, bound=bound,
                              status=status)
