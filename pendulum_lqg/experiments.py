@@ -49,9 +49,11 @@ independent, so they can run in any order or on other machines; :func:`run_unit`
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import itertools
 import json
+import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -156,7 +158,17 @@ class Configuration:
         from pendulum_lqg.plant import steps_per_period
 
         scenario, _ = self.build()          # the Scenario checks the duration ceiling
-        steps_per_period(self.plants(scenario)[1], scenario.control_period)
+        steps_per_period(_simulated_plant(self.model_file, scenario.overrides),
+                         scenario.control_period)
+
+
+@functools.lru_cache(maxsize=32)
+def _simulated_plant(model_file: str | None, overrides: ModelOverrides) -> Plant:
+    """The plant a configuration simulates, compiled once per (file, overrides) while a grid is
+    validated (a grid over noise or policies shares one model)."""
+    from pendulum_lqg.plant import load_plant
+
+    return load_plant(model_file, overrides=overrides)
 
 
 @dataclass(frozen=True)
@@ -179,6 +191,8 @@ class ExperimentSpec:
                        model_file: str | None = None) -> ExperimentSpec:
         """The same experiment with ``--episodes`` / ``--seed`` / ``--model`` of the command line
         (a model path given here is taken from the current folder)."""
+        if episodes is None and seed is None and model_file is None:
+            return self                     # nothing to change: no second validation
         src = dict(self.source)
         if episodes is not None:
             src["episodes"] = episodes
@@ -371,6 +385,10 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     seed = _as_int("seed", data.get("seed", 0), 0)
     chunk = _as_int("chunk", data.get("chunk", 250), 1)
     keys = list(grid)
+    from pendulum_lqg.limits import MAX_CONFIGURATIONS, check_at_most
+
+    check_at_most("grid", math.prod(len(grid[k]) for k in keys), MAX_CONFIGURATIONS,
+                  "configurations, each validated before the first unit runs")
     configs = []
     combos = itertools.product(*[grid[k] for k in keys]) if keys else [()]
     for i, combo in enumerate(combos):

@@ -19,6 +19,9 @@ MAX_RECORDED_EPISODES = 1_000
 #: ``bench`` assembles ``episodes.csv`` and the summary from every row of the experiment
 #: (configurations × episodes), about 2 kB of memory each.
 MAX_BENCH_ROWS = 2_000_000
+#: Configurations of one experiment grid (each is validated — its model compiled once per distinct
+#: model — before the first work unit runs).
+MAX_CONFIGURATIONS = 100_000
 #: Points of a region-of-attraction map (each is one noise-free episode of the batch).
 MAX_MAP_POINTS = 40_000
 #: Frequencies of a margins study's grid and points of a stored Nyquist curve.

@@ -26,14 +26,14 @@ matplotlib (Agg backend) is imported only when a report is made.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.metrics import wilson_interval
+from pendulum_lqg.metrics import mean_se, wilson_interval
+from pendulum_lqg.results import check_name
 
 SWEEP_KEYS = ("noise_scale", "control_period", "theta0", "pole_mass_scale", "pole_length_scale",
               "cart_mass_scale", "duration")
@@ -163,9 +163,11 @@ def make_report(paths: list[Path], out: Path) -> Path:
         spec = read_json(spec_path)
         src = field(spec, "spec", dict, spec_path, default={})
         name = field(spec, "name", str, spec_path, default=folder.name)
-        if not name or any(c in name for c in "/\\\0") or name in (".", ".."):
+        try:
+            check_name(name)
+        except ConfigError:
             raise ConfigError(f"results: {spec_path}: key 'name': expected a plain name, got "
-                              f"{name!r}")
+                              f"{name!r}") from None
         field(src, "description", str, spec_path, default="", where="spec.")
         field(src, "seed", int, spec_path, default=0, where="spec.")
         field(src, "study", str, spec_path, default=None, where="spec.")
@@ -248,11 +250,10 @@ def _metric_curve(rows: list[dict[str, Any]], x: str, metric: str, *, successes_
     mean, se = [], []
     for xv in xs:
         grp = by_x.get((xv,)) or by_x[(int(xv),)]
-        vals = np.array([float(r[metric]) for r in grp
-                         if not successes_only or bool(r["success"])])
-        vals = vals[np.isfinite(vals)]
-        mean.append(vals.mean() if vals.size else np.nan)
-        se.append(vals.std(ddof=1) / math.sqrt(vals.size) if vals.size > 1 else 0.0)
+        m, s = mean_se(np.array([float(r[metric]) for r in grp
+                                 if not successes_only or bool(r["success"])]))
+        mean.append(m)
+        se.append(s)            # nan for one sample (no error bar), as in summary.json
     return xs, np.array(mean), np.array(se)
 
 
