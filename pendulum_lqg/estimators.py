@@ -27,6 +27,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
+from pendulum_lqg.design.kalman import measurement_update
 from pendulum_lqg.errors import ShapeError
 
 
@@ -210,13 +211,10 @@ class TimeVaryingKalman(Estimator):
 
     def _covariances(self, a: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(M_a, P_a, L_a)``, extending the shared sequence as needed."""
-        C, n = self.C, self.n_state
+        C = self.C
         while len(self._P) <= a:
             M = self._M[len(self._P)]
-            S = C @ M @ C.T + self.V                                  # innovation covariance
-            L = np.linalg.solve(S, C @ M).T                           # L = M Cᵀ S⁻¹ = P Cᵀ V⁻¹
-            I_LC = np.eye(n) - L @ C
-            P = I_LC @ M @ I_LC.T + L @ self.V @ L.T                  # Joseph form
+            L, P = measurement_update(M, C, self.V)                   # Joseph form
             self._P.append(P)
             self._L.append(L)
             self._M.append(self.Phi @ P @ self.Phi.T + self.Qd)       # M⁺ = Φ P Φᵀ + Q_d

@@ -226,18 +226,22 @@ def unstable_modes(A: np.ndarray, B: np.ndarray, *, discrete: bool, uncontrollab
     With ``uncontrollable=True`` these are the modes that make ``(A, B)`` not stabilisable. Used
     with ``(Aᵀ, Cᵀ)`` for detectability.
     """
-    n = A.shape[0]
-    bad: list[complex] = []
     scale = max(1.0, float(np.linalg.norm(A, 2)), float(np.linalg.norm(B, 2)) if B.size else 0.0)
-    for lam in np.linalg.eigvals(A):
-        stable = abs(lam) < 1 - 1e-12 if discrete else lam.real < -1e-12 * scale
-        if stable:
-            continue
-        pbh = np.hstack([A - lam * np.eye(n), B])
-        sv = np.linalg.svd(pbh, compute_uv=False)
-        if sv[-1] <= 1e-9 * scale:
-            bad.append(complex(lam))
-    return bad
+
+    def unstable(lam: complex) -> bool:
+        return abs(lam) >= 1 - 1e-12 if discrete else lam.real >= -1e-12 * scale
+
+    return pbh_failures(A, B, select=unstable, tol=1e-9 * scale)
+
+
+def pbh_failures(A: np.ndarray, B: np.ndarray, *, select: Callable[[complex], bool],
+                 tol: float) -> list[complex]:
+    """The package's one PBH test: the eigenvalues λ of ``A`` that ``select`` keeps and for which
+    ``rank [A − λI, B] < n`` (smallest singular value ≤ ``tol``) — uncontrollable modes of
+    ``(A, B)``, or unobservable modes of ``(A, C)`` given ``(Aᵀ, Cᵀ)``."""
+    n = A.shape[0]
+    return [complex(lam) for lam in np.linalg.eigvals(A) if select(lam)
+            and np.linalg.svd(np.hstack([A - lam * np.eye(n), B]), compute_uv=False)[-1] <= tol]
 
 
 def require_stabilizable(A: np.ndarray, B: np.ndarray, *, discrete: bool, names: str) -> None:
@@ -281,18 +285,14 @@ def hidden_marginal_modes(A: np.ndarray, C: np.ndarray, *, discrete: bool) -> li
     """Eigenvalues of A on the stability boundary that ``C`` does not see (PBH:
     ``rank [A − λI; C] < n``). A Riccati equation with such a mode in its weight has no
     stabilising solution (the LQR cost or the Kalman noise must reach every marginal mode)."""
-    n = A.shape[0]
     scale = max(1.0, float(np.linalg.norm(A, 2)))
     weight = max(float(np.linalg.norm(C, 2)), 1e-300) if C.size else 1e-300
-    bad: list[complex] = []
-    for lam in np.linalg.eigvals(A):
-        gap = abs(abs(lam) - 1.0) if discrete else abs(lam.real)
-        if gap > MARGINAL_RTOL * scale:
-            continue
-        sv = np.linalg.svd(np.vstack([A - lam * np.eye(n), C]), compute_uv=False)
-        if sv[-1] <= MARGINAL_RTOL * max(scale, weight):
-            bad.append(complex(lam))
-    return bad
+
+    def marginal(lam: complex) -> bool:
+        return (abs(abs(lam) - 1.0) if discrete else abs(lam.real)) <= MARGINAL_RTOL * scale
+
+    # [A − λI; C] has the singular values of its transpose [Aᵀ − λI, Cᵀ]
+    return pbh_failures(A.T, C.T, select=marginal, tol=MARGINAL_RTOL * max(scale, weight))
 
 
 def _modes(modes: list[complex]) -> str:

@@ -76,6 +76,18 @@ def _observer_data(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: Ar
     return A, G, C, W, V
 
 
+
+def measurement_update(M: np.ndarray, C: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The Kalman measurement update of an a-priori covariance ``M``: the filter gain
+    ``L = M Cᵀ S⁻¹`` (``S = C M Cᵀ + V``, the innovation covariance; equal to ``P Cᵀ V⁻¹``) and the
+    a-posteriori covariance in Joseph form ``P = (I − LC) M (I − LC)ᵀ + L V Lᵀ`` (stays symmetric
+    positive semi-definite under rounding). The one implementation: the steady-state and
+    time-varying designs and the runtime time-varying filter all call it."""
+    S = C @ M @ C.T + V
+    L = np.linalg.solve(S, C @ M).T
+    I_LC = np.eye(M.shape[0]) - L @ C
+    return L, I_LC @ M @ I_LC.T + L @ V @ L.T
+
 @design_function('W and V')
 def kalman(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike) -> KalmanResult:
     r"""Continuous steady-state Kalman–Bucy filter (python-control / MATLAB ``lqe``).
@@ -140,10 +152,7 @@ def dkalman(Phi: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLi
     require_noise_reaches_marginal_modes(Phi, GWG, discrete=True, names="Phi")
     M = solve_discrete_are(Phi.T, C.T, GWG, V)
     M = 0.5 * (M + M.T)
-    S = C @ M @ C.T + V                              # innovation covariance
-    L = np.linalg.solve(S, C @ M).T                  # L = M Cᵀ S⁻¹ (S, M symmetric)
-    I_LC = np.eye(Phi.shape[0]) - L @ C
-    P = I_LC @ M @ I_LC.T + L @ V @ L.T              # Joseph form of (I − LC) M
+    L, P = measurement_update(M, C, V)
     P = 0.5 * (P + P.T)
     L_pred = Phi @ L
     poles = np.linalg.eigvals(Phi - L_pred @ C)
@@ -190,10 +199,7 @@ def kalman_tv(Phi: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: Array
     M = M0
     for k in range(steps):
         Ms[k] = M
-        S = C @ M @ C.T + V
-        Lk = np.linalg.solve(S, C @ M).T                 # = P Cᵀ V⁻¹ (equivalent form)
-        I_LC = np.eye(n) - Lk @ C
-        P = I_LC @ M @ I_LC.T + Lk @ V @ Lk.T            # Joseph form
+        Lk, P = measurement_update(M, C, V)
         Ls[k], Ps[k] = Lk, 0.5 * (P + P.T)
         M = Phi @ Ps[k] @ Phi.T + GWG
     return TimeVaryingKalmanGains(L=Ls, M=Ms, P=Ps)

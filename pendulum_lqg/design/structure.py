@@ -7,7 +7,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import as_matrix, as_square, design_function, unstable_modes
+from pendulum_lqg.design._checks import (
+    as_matrix,
+    as_square,
+    design_function,
+    pbh_failures,
+    unstable_modes,
+)
 
 
 @design_function()
@@ -35,14 +41,8 @@ def pbh_rank_deficient(A: ArrayLike, B: ArrayLike, *, tol: float = 1e-9) -> list
     """Eigenvalues λ of A with ``rank [A − λI, B] < n`` (uncontrollable modes, PBH test)."""
     A = as_square("A", A)
     B = as_matrix("B", B, (A.shape[0], None))
-    n = A.shape[0]
     scale = max(1.0, float(np.linalg.norm(A, 2)), float(np.linalg.norm(B, 2)))
-    out = []
-    for lam in np.linalg.eigvals(A):
-        sv = np.linalg.svd(np.hstack([A - lam * np.eye(n), B]), compute_uv=False)
-        if sv[-1] <= tol * scale:
-            out.append(complex(lam))
-    return out
+    return pbh_failures(A, B, select=lambda lam: True, tol=tol * scale)
 
 
 @dataclass(frozen=True)
