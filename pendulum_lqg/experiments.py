@@ -87,13 +87,6 @@ DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
 MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))
 
 
-def experiments_dir() -> Path:
-    """The folder of the shipped experiment files (checkout ``experiments/`` or installed copy)."""
-    from pendulum_lqg.resources import data_dir
-
-    return data_dir("experiments")
-
-
 def _check_keys(where: str, table: dict[str, Any], known: tuple[str, ...]) -> None:
     if not isinstance(table, dict):
         raise ConfigError(f"{where}: expected a table, got {type(table).__name__}")

@@ -22,8 +22,6 @@ from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.limits import MAX_CONTROL_PERIOD, MAX_STEPS_PER_PERIOD
 
 STATE_NAMES: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")
-STATE_LABELS: tuple[str, ...] = ("cart position p [m]", "pole angle θ [rad]",
-                                 "cart velocity ṗ [m/s]", "pole rate θ̇ [rad/s]")
 OUTPUT_NAMES: tuple[str, ...] = ("p", "theta")
 
 #: Names of MJCF elements the code relies on (the XML defines them; these are look-up keys).

@@ -219,11 +219,10 @@ def as_positive(name: str, value: float) -> float:
     return v
 
 
-def unstable_modes(A: np.ndarray, B: np.ndarray, *, discrete: bool, uncontrollable: bool = True,
-                   ) -> list[complex]:
+def unstable_modes(A: np.ndarray, B: np.ndarray, *, discrete: bool) -> list[complex]:
     """Eigenvalues of A that fail the PBH test ``rank [A − λI, B] = n`` and are not stable.
 
-    With ``uncontrollable=True`` these are the modes that make ``(A, B)`` not stabilisable. Used
+    These are the modes that make ``(A, B)`` not stabilisable. Used
     with ``(Aᵀ, Cᵀ)`` for detectability.
     """
     scale = max(1.0, float(np.linalg.norm(A, 2)), float(np.linalg.norm(B, 2)) if B.size else 0.0)

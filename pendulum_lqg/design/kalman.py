@@ -21,7 +21,6 @@ from pendulum_lqg.design._checks import (
     design_function,
     require_detectable,
     require_noise_reaches_marginal_modes,
-    require_stabilizable,
     require_stable,
 )
 from pendulum_lqg.errors import DesignError
@@ -203,15 +202,3 @@ def kalman_tv(Phi: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: Array
         Ls[k], Ps[k] = Lk, 0.5 * (P + P.T)
         M = Phi @ Ps[k] @ Phi.T + GWG
     return TimeVaryingKalmanGains(L=Ls, M=Ms, P=Ps)
-
-
-@design_function()
-def require_noise_reaches_unstable_modes(A: ArrayLike, G: ArrayLike, W: ArrayLike, *,
-                                         discrete: bool) -> None:
-    """Optional check that ``(A, G W^½)`` is stabilisable (strictly positive steady covariance)."""
-    A = as_square("A", A)
-    G = as_matrix("G", G, (A.shape[0], None))
-    W = as_weight("W", W, G.shape[1], definite=False)
-    evals, evecs = np.linalg.eigh(W)
-    root = evecs @ np.diag(np.sqrt(np.clip(evals, 0, None))) @ evecs.T
-    require_stabilizable(A, G @ root, discrete=discrete, names="(A, G·W^½)")
