@@ -1,4 +1,6 @@
-"""The one validator for small numeric vectors in configurations (scenario, noise, design spec)."""
+"""The validators of configuration numbers: one for positive scalars (scenario, env, model
+overrides, timing and the design functions) and one for small vectors (scenario, noise, design
+spec)."""
 
 from __future__ import annotations
 
@@ -6,7 +8,19 @@ from typing import Any
 
 import numpy as np
 
-from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.errors import ConfigError, PendulumLQGError
+
+
+def positive_number(name: str, value: Any, *,
+                    error: type[PendulumLQGError] = ConfigError) -> float:
+    """``value`` as a float if it is a finite positive real number (a Python or numpy int or
+    float; not a bool, a string or a complex); else ``error`` naming ``name``: "dt: expected a
+    finite positive number, got 0.0"."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.integer
+                                                             | np.floating) \
+            or not np.isfinite(value) or value <= 0:
+        raise error(f"{name}: expected a finite positive number, got {value!r}")
+    return float(value)
 
 
 def config_vector(name: str, value: Any, n: int, *, nonneg: bool = False,

@@ -27,6 +27,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from gymnasium.wrappers import TimeLimit
 
+from pendulum_lqg._config import positive_number
 from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
 from pendulum_lqg.metrics import FAIL_NONE, FAIL_REASONS
 from pendulum_lqg.noise import LECTURE_V, NoiseModel
@@ -47,13 +48,6 @@ DEFAULT_REWARD_SCALE = 10.0
 #: The smallest reward of a step that survives: the smallest normal float, where ``exp`` of a
 #: very large cost would underflow to the failure reward 0.
 REWARD_FLOOR = float(np.finfo(np.float64).smallest_normal)
-
-
-def _positive(name: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer) \
-            or not np.isfinite(value) or value <= 0:
-        raise ConfigError(f"{name}: expected a finite positive number, got {value!r}")
-    return float(value)
 
 
 def _positive_int(name: str, value: object) -> int:
@@ -138,7 +132,7 @@ class EnvConfig:
                             randomize=dict(randomize) if isinstance(randomize, Mapping)
                             else randomize)  # type: ignore[arg-type]
         return cls(scenario=scenario, observation_mode=observation_mode,
-                   reward_scale=_positive("reward_scale", reward_scale), model_path=model_path)
+                   reward_scale=positive_number("reward_scale", reward_scale), model_path=model_path)
 
     def make_simulator(self, *, nthread: int | None) -> tuple[Plant, Simulator]:
         plant = load_plant(self.model_path, overrides=self.scenario.overrides)

@@ -18,6 +18,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from pendulum_lqg._config import positive_number
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.limits import MAX_CONTROL_PERIOD, MAX_STEPS_PER_PERIOD
 
@@ -71,10 +72,7 @@ class ModelOverrides:
             value = getattr(self, f.name)
             if value is None:
                 continue
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise ConfigError(f"{f.name}: expected a number, got {value!r}")
-            if not np.isfinite(value) or value <= 0:
-                raise ConfigError(f"{f.name}: expected a finite positive number, got {value!r}")
+            positive_number(f.name, value)
         for name in ("pole_mass", "pole_length", "cart_mass"):
             if getattr(self, name) is not None and getattr(self, name + "_scale") is not None:
                 raise ConfigError(f"{name}: give either {name} or {name}_scale, not both")
@@ -441,15 +439,8 @@ def steps_per_period(plant: Plant, dt: float) -> int:
     :data:`MAX_STEPS_PER_PERIOD` and ``dt ≤`` :data:`MAX_CONTROL_PERIOD`; otherwise a one-line
     :class:`ConfigError` naming ``control_period``.
     """
-    if isinstance(dt, bool) or np.iscomplexobj(dt):
-        raise ConfigError(f"control_period: expected a number of seconds, got {dt!r}")
-    try:
-        dt = float(dt)
-    except (TypeError, ValueError) as exc:
-        raise ConfigError(f"control_period: expected a number of seconds, got {dt!r}") from exc
+    dt = positive_number("control_period", dt)
     h = plant.timestep
-    if not np.isfinite(dt) or dt <= 0:
-        raise ConfigError(f"control_period: expected a positive number of seconds, got {dt!r}")
     if dt > MAX_CONTROL_PERIOD * (1 + 1e-12):
         raise ConfigError(f"control_period: expected at most {MAX_CONTROL_PERIOD:g} s (the "
                           f"ceiling), got {dt!r} s")

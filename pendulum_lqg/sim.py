@@ -44,7 +44,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
-from pendulum_lqg._config import config_vector
+from pendulum_lqg._config import config_vector, positive_number
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.limits import MAX_CONTROL_PERIOD, MAX_DELAY_PERIODS, check_duration
 from pendulum_lqg.metrics import (
@@ -122,11 +122,7 @@ class Scenario:
 
     def __post_init__(self) -> None:
         for name in ("control_period", "duration", "theta_max", "settle_band", "cost_R"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float) \
-                    or not np.isfinite(value) or value <= 0:
-                raise ConfigError(f"{name}: expected a finite positive number, got {value!r}")
-            object.__setattr__(self, name, float(value))
+            object.__setattr__(self, name, positive_number(name, getattr(self, name)))
         check_duration(self.duration, self.control_period)     # at most MAX_PERIODS periods
         if self.control_period > MAX_CONTROL_PERIOD * (1 + 1e-12):
             raise ConfigError(f"control_period: expected at most {MAX_CONTROL_PERIOD:g} s (the "

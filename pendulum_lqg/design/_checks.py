@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+from pendulum_lqg._config import positive_number
 from pendulum_lqg.errors import DesignError, PendulumLQGError, ShapeError
 
 #: Relative tolerance for symmetry / definiteness / rank decisions.
@@ -207,16 +208,8 @@ def as_poles(name: str, poles: ArrayLike | Sequence[complex], n: int) -> np.ndar
 
 
 def as_positive(name: str, value: float) -> float:
-    """A finite positive real number."""
-    if isinstance(value, bool) or np.iscomplexobj(value):
-        raise DesignError(f"{name}: expected a positive real number, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise DesignError(f"{name}: expected a positive number, got {value!r}") from exc
-    if not np.isfinite(v) or v <= 0:
-        raise DesignError(f"{name}: expected a finite positive number, got {value!r}")
-    return v
+    """A finite positive real number (:class:`DesignError` naming ``name`` otherwise)."""
+    return positive_number(name, value, error=DesignError)
 
 
 def unstable_modes(A: np.ndarray, B: np.ndarray, *, discrete: bool) -> list[complex]:
