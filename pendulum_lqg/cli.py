@@ -557,9 +557,10 @@ def _run_in_batches(plant: Any, scenario: Any, policy: Any, args: argparse.Names
     import time
 
     from pendulum_lqg import limits
+    from pendulum_lqg.plant import steps_per_period
     from pendulum_lqg.sim import BatchResult, run_episodes
 
-    steps = scenario.n_periods * max(1, round(scenario.control_period / plant.timestep))
+    steps = scenario.n_periods * steps_per_period(plant, scenario.control_period)
     size = max(1, min(limits.RUN_BATCH, 20_000_000 // max(steps, 1)))    # ≤ ~2·10⁷ physics steps each
     total = args.episodes
     rows: list[dict[str, Any]] = []

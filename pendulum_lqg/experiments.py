@@ -59,6 +59,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from pendulum_lqg._config import check_keys
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.noise import NoiseModel
 from pendulum_lqg.plant import ModelOverrides, Plant
@@ -85,14 +86,6 @@ SCENARIO_KEYS = ("control_period", "duration", "x0", "x0_std", "estimate0", "the
 NOISE_KEYS = tuple(f.name for f in dataclasses.fields(NoiseModel))
 DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
 MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))
-
-
-def _check_keys(where: str, table: dict[str, Any], known: tuple[str, ...]) -> None:
-    if not isinstance(table, dict):
-        raise ConfigError(f"{where}: expected a table, got {type(table).__name__}")
-    unknown = sorted(set(table) - set(known))
-    if unknown:
-        raise ConfigError(f"{where}: unknown key {unknown[0]!r}; known keys: " + ", ".join(known))
 
 
 @dataclass(frozen=True)
@@ -333,10 +326,10 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     ``base_dir`` is the folder relative plugin files (``policy = ["my_ctrl.py:make"]``) are taken
     from: the experiment file's own folder (then the current folder).
     """
-    _check_keys("experiment", data, TOP_KEYS)
+    check_keys("experiment", data, TOP_KEYS)
     for table, known in (("scenario", SCENARIO_KEYS), ("noise", NOISE_KEYS),
                          ("design", DESIGN_KEYS), ("model", MODEL_KEYS)):
-        _check_keys(table, data.get(table, {}), known)
+        check_keys(table, data.get(table, {}), known)
     base = {table: dict(data.get(table, {}))
             for table in ("scenario", "noise", "design", "model")}
     for key in ("name", "description"):
@@ -345,7 +338,7 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     if "name" in data:
         _check_name(str(data["name"]))
     grid = data.get("grid", {})
-    _check_keys("grid", grid, GRID_KEYS)
+    check_keys("grid", grid, GRID_KEYS)
     for key, values in grid.items():
         if not isinstance(values, list) or not values:
             raise ConfigError(f"grid.{key}: expected a non-empty list, got {values!r}")

@@ -159,10 +159,8 @@ class MetricsAccumulator:
         abs_theta = np.abs(theta)
         # a row's max can only grow if this period's largest value (over the batch: one flat
         # reduction) exceeds the smallest running max — rarely, once the start has passed
-        for running, a in ((self.max_theta, abs_theta), (self.max_p, None)):
+        for running, a in ((self.max_theta, abs_theta), (self.max_p, np.abs(p))):
             cur = running[ids]
-            if a is None:
-                a = np.abs(p)
             if not a.max(initial=0.0) <= cur.min(initial=np.inf):     # nan: update
                 running[ids] = np.maximum(cur, a.max(axis=1))
         self.max_u[ids] = np.maximum(self.max_u[ids], np.abs(u))

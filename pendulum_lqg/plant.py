@@ -14,11 +14,12 @@ import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
 
-from pendulum_lqg._config import positive_number
+from pendulum_lqg._config import check_keys, positive_number
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.limits import MAX_CONTROL_PERIOD, MAX_STEPS_PER_PERIOD
 
@@ -81,11 +82,7 @@ class ModelOverrides:
     def from_mapping(cls, data: dict[str, object] | None) -> ModelOverrides:
         """Build from a mapping (e.g. a TOML table); unknown keys are an error listing the known."""
         data = dict(data or {})
-        known = [f.name for f in dataclasses.fields(cls)]
-        unknown = sorted(set(data) - set(known))
-        if unknown:
-            raise ConfigError(f"model override {unknown[0]!r}: unknown key; known keys: "
-                              + ", ".join(known))
+        check_keys("model", data, [f.name for f in dataclasses.fields(cls)])
         return cls(**data)  # type: ignore[arg-type]
 
     def is_empty(self) -> bool:
@@ -140,19 +137,14 @@ class Randomization:
             object.__setattr__(self, name, (lo, hi))
 
     @classmethod
-    def from_mapping(cls, data: object) -> Randomization:
+    def from_mapping(cls, data: Any) -> Randomization:
         """From a mapping such as the TOML ``randomize = {pole_mass_scale = [0.8, 1.2]}``."""
         if isinstance(data, Randomization):
             return data
         if data is None:
             return cls()
-        if not isinstance(data, dict):
-            raise ConfigError(f"randomize: expected a table of [lo, hi] ranges, got {data!r}")
-        unknown = sorted(set(data) - set(RANDOMIZABLE))
-        if unknown:
-            raise ConfigError(f"randomize: unknown key {unknown[0]!r}; known keys: "
-                              + ", ".join(RANDOMIZABLE))
-        return cls(**data)
+        check_keys("randomize", data, RANDOMIZABLE)
+        return cls(**dict(data))
 
     def is_empty(self) -> bool:
         return all(getattr(self, name) is None for name in RANDOMIZABLE)

@@ -94,6 +94,7 @@ class ResultsDir:
         self.units_dir = self.path / "units"
         self.lock = self.path / ".lock"
         self._locked = False
+        self._fingerprint: str | None = None       # set by prepare(); enters the check records
 
     def prepare(self, spec: ExperimentSpec, *, force: bool = False, resume: bool = False,
                 allow_version_change: bool = False) -> None:
@@ -237,7 +238,7 @@ class ResultsDir:
         """Write a unit's rows and then its check record (a unit without one is not trusted)."""
         text = rows_to_csv(rows)
         atomic_write(self.units_dir / f"{unit.key}.csv", text)
-        record = _unit_record(unit, getattr(self, "_fingerprint", None), text.encode("utf-8"))
+        record = _unit_record(unit, self._fingerprint, text.encode("utf-8"))
         atomic_write(self.units_dir / f"{unit.key}.json", json.dumps(record, sort_keys=True) + "\n")
 
     def collect(self, spec: ExperimentSpec) -> list[dict[str, Any]]:

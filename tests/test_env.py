@@ -255,7 +255,7 @@ def test_a_closed_env_says_so():
     ({"noise_scale": True}, "noise_scale"),
     ({"theta_max": 0.0}, "theta_max"),
     ({"reward_scale": 0.0}, "reward_scale"),
-    ({"model_overrides": {"pole_weight": 1.0}}, "model override"),
+    ({"model_overrides": {"pole_weight": 1.0}}, "model: unknown key"),
     ({"model_overrides": {"pole_mass": -1.0}}, "pole_mass"),
     ({"width": 4000}, "width"),
     ({"render_mode": "human"}, "render_mode"),

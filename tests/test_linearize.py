@@ -115,7 +115,7 @@ def test_model_overrides_and_errors(tmp_path):
         ModelOverrides(pole_mass=-1.0)
     with pytest.raises(ConfigError, match="pole_mass: give either pole_mass or pole_mass_scale"):
         ModelOverrides(pole_mass=1.0, pole_mass_scale=2.0)
-    with pytest.raises(ConfigError, match="model override 'pole_mas': unknown key; known keys: pole_mass"):
+    with pytest.raises(ConfigError, match="model: unknown key 'pole_mas'; known keys: pole_mass"):
         ModelOverrides.from_mapping({"pole_mas": 1.0})
     with pytest.raises(ConfigError, match="model: file not found"):
         load_plant(tmp_path / "missing.xml")

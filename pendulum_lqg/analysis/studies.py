@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from pendulum_lqg._config import check_keys
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.jsonio import plain
 from pendulum_lqg.limits import MAX_FREQUENCIES, MAX_MAP_POINTS, check_at_most
@@ -58,12 +59,7 @@ def parse_study_params(study: str, table: dict[str, object]) -> dict[str, object
     if study not in STUDY_PARAMS:
         raise ConfigError(f"study: unknown {study!r}; expected one of " + ", ".join(STUDY_PARAMS))
     defaults = STUDY_PARAMS[study]
-    if not isinstance(table, dict):
-        raise ConfigError(f"{study}: expected a table, got {type(table).__name__}")
-    unknown = sorted(set(table) - set(defaults))
-    if unknown:
-        raise ConfigError(f"{study}: unknown key {unknown[0]!r}; known keys: "
-                          + ", ".join(defaults))
+    check_keys(study, table, list(defaults))
     out = {**defaults, **table}
     for key, default in defaults.items():
         value = out[key]
