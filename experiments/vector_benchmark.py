@@ -29,7 +29,7 @@ import numpy as np
 
 import pendulum_lqg
 from pendulum_lqg.agent import LQGAgent
-from pendulum_lqg.perf import raw_rollout_rate
+from pendulum_lqg.perf import raw_batch_rate, raw_rollout_rate
 from pendulum_lqg.sim import rollout_chunk
 
 
@@ -65,18 +65,23 @@ def main() -> None:
         time_steps(envs, agent, 20, seed=0)                     # warm-up
     print(f"{n} envs, {args.steps} vector steps per run, {args.repeats} rounds, seeds "
           f"0..{args.repeats - 1}, {k} physics steps per env step, {nthread} rollout threads")
-    rates: dict[str, list[float]] = {"native": [], "sync": [], "physics": []}
+    rates: dict[str, list[float]] = {"native": [], "sync": [], "rollout": [], "batch": [],
+                                     "physics": []}
     for r in range(args.repeats):
         for name, envs in contenders.items():
             rates[name].append(n * args.steps / time_steps(envs, agent, args.steps, seed=r))
-        rates["physics"].append(raw_rollout_rate(native.unwrapped.plant, n, k, nthread,
-                                                 calls=args.steps, outputs=False,
+        plant = native.unwrapped.plant
+        rates["rollout"].append(raw_rollout_rate(plant, n, k, nthread, calls=args.steps,
+                                                 outputs=False,
                                                  chunk_size=rollout_chunk(n, nthread, k)) / k)
+        rates["batch"].append(raw_batch_rate(plant, n, k, nthread, calls=args.steps) / k)
+        rates["physics"].append(max(rates["rollout"][-1], rates["batch"][-1]))
         log = {name: f"{v[-1]:,.0f}" for name, v in rates.items()}
         print(f"round {r + 1}/{args.repeats}: env steps/s {log}")
     med = {name: float(np.median(v)) for name, v in rates.items()}
     for name, label in (("native", "native vector env"), ("sync", "SyncVectorEnv"),
-                        ("physics", "bare physics (rollout)")):
+                        ("rollout", "bare mujoco.rollout"), ("batch", "bare mujoco.batch"),
+                        ("physics", "bare physics (faster)")):
         print(f"{label:>28}: {med[name]:12,.0f} env steps/s ({med[name] * k:14,.0f} physics "
               f"steps/s; runs {min(rates[name]):,.0f}–{max(rates[name]):,.0f})")
     to_physics = [a / b for a, b in zip(rates["native"], rates["physics"], strict=True)]

@@ -197,6 +197,18 @@ class _Actions:
         self.space = spaces.Box(np.float32(bound[0]), np.float32(bound[1]), shape=(1,),
                                 dtype=np.float32)
 
+    def force(self, action: object) -> float:
+        """The requested force [N] of a single env's action (shape (1,))."""
+        if type(action) is np.ndarray and action.shape == (1,) and action.dtype.kind == "f":
+            u = float(action[0])                               # the common case, kept cheap
+            if not math.isfinite(u):
+                raise PendulumLQGError(f"action: expected finite forces, got {action!r}")
+        else:
+            u = float(_action_force(action, 1)[0])
+        if self.normalize:
+            u = self.lo + (u + 1.0) * (0.5 * (self.hi - self.lo))
+        return u
+
     def forces(self, action: object, n: int) -> np.ndarray:
         u = _action_force(action, n)
         if self.normalize:
@@ -432,11 +444,10 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         if self._ended:
             raise PendulumLQGError("step: the episode has failed; call reset() first")
         sim = self._sim
-        u = self._actions.forces(action, 1)
-        res = sim.step(u)
-        failed = bool(res.failed[0])
-        reward = step_reward(res.cost[0], failed, self._scale_dt)
-        cost = float(res.cost[0])
+        u = self._actions.force(action)
+        cost, reason = sim.step_one(u)
+        failed = reason != FAIL_NONE
+        reward = step_reward(cost, failed, self._scale_dt)
         self._running_cost += cost
         if failed:
             self._ended = True
@@ -444,8 +455,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         else:
             obs = self._observe()
         truncated = int(sim.period[0]) >= sim.n_periods         # TimeLimit's rule
-        force = self._actions.applied(float(u[0]))
-        return obs, reward, failed, truncated, self._info(cost, int(res.reason[0]), force)
+        return obs, reward, failed, truncated, self._info(cost, reason, self._actions.applied(u))
 
     def _observe(self) -> np.ndarray:
         y = self._sim.measure()   # always: it draws this period's process noise too

@@ -165,10 +165,13 @@ class MetricsAccumulator:
                 running[ids] = np.maximum(cur, a.max(axis=1))
         self.max_u[ids] = np.maximum(self.max_u[ids], np.abs(u))
         exceed = abs_theta > self.band
-        if exceed.any():
-            last = k - 1 - np.argmax(exceed[:, ::-1], axis=1)
-            has = exceed.any(axis=1)
-            self.settle[self._index(ids)[has]] = t[has] + (last[has] + 1) * h
+        has = exceed.any(axis=1)
+        if has.any():       # the end of the row's last physics step outside the band
+            settled = t + (k - np.argmax(exceed[:, ::-1], axis=1)) * h
+            if has.all():
+                self.settle[ids] = settled
+            else:
+                self.settle[self._index(ids)[has]] = settled[has]
         if x_hat is not None:
             err = x_hat - x_start
             with np.errstate(over="ignore", invalid="ignore"):     # a diverged row: inf is honest

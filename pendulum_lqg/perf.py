@@ -57,6 +57,25 @@ def raw_rollout_rate(plant: object, episodes: int, nstep: int, nthread: int, *,
         return calls * episodes * nstep / (time.perf_counter() - t)
 
 
+def raw_batch_rate(plant: object, episodes: int, nstep: int, nthread: int, *,
+                   calls: int = 1) -> float:
+    """Physics steps per second of ``calls`` calls of ``mujoco.batch.Batch.step(nstep)`` on
+    ``episodes`` simulations (θ₀ = 0.1, the force written before each call, nothing recorded):
+    bare physics that returns to Python every ``nstep`` steps, as a vector env must once per
+    control period (the same MuJoCo batch the simulation core steps)."""
+    from mujoco.batch import Batch
+
+    m = plant.model  # type: ignore[attr-defined]
+    batch = Batch(m, episodes, nthread=max(1, nthread))
+    batch.qpos[:, plant.qpos_index[1]] = 0.1  # type: ignore[attr-defined]
+    ctrl = batch.ctrl
+    t = time.perf_counter()
+    for _ in range(calls):
+        ctrl[:] = 0.0
+        batch.step(nstep=nstep)
+    return calls * episodes * nstep / (time.perf_counter() - t)
+
+
 def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None = None,
              repeats: int = 5, memory: bool = False,
              log: Callable[[str], None] = lambda s: None) -> dict[str, Any]:

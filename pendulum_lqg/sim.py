@@ -42,7 +42,7 @@ from typing import Any, Literal
 
 import mujoco
 import numpy as np
-from mujoco import rollout as mj_rollout
+from mujoco.batch import Batch
 
 from pendulum_lqg._config import config_vector, positive_number
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
@@ -60,6 +60,11 @@ from pendulum_lqg.plant import ModelOverrides, Plant, Randomization, load_plant,
 
 #: Any state component beyond this magnitude counts as divergence.
 RUNAWAY = 1e6
+#: A one-row period that did not fail (read-only: shared by every step of the single-row path).
+_NOT_FAILED = np.zeros(1, dtype=bool)
+_NOT_FAILED.flags.writeable = False
+_NO_REASON = np.zeros(1, dtype=np.int8)
+_NO_REASON.flags.writeable = False
 #: MuJoCo's warnings for an unstable state (it then resets the data; ``mujoco.rollout`` stops).
 _INSTABILITY_WARNINGS = tuple(int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS,
                                                mujoco.mjtWarning.mjWARN_BADQVEL,
@@ -283,12 +288,6 @@ class Simulator:
         self._inv_limits = 1.0 / np.array([self.track, scenario.theta_max, RUNAWAY, RUNAWAY,
                                            2.0 * self.u_max])
         self._inv_limits_flat = np.tile(self._inv_limits, self.k + 1)
-        nstate, qpos_cols, qvel_cols = plant.physics_state_layout
-        self._nstate = nstate
-        self._cols = np.concatenate([qpos_cols, qvel_cols])
-        contiguous = np.array_equal(self._cols, np.arange(self._cols[0], self._cols[0] + 4))
-        self._state_slice = slice(self._cols[0], self._cols[0] + 4) if contiguous else self._cols
-        self._time_col = 0
         self._force_noise = scenario.noise.process == "force" and self.noise.enabled
         self._state_noise = scenario.noise.process == "state" and self.noise.enabled
         st = mujoco.mjtState
@@ -296,10 +295,8 @@ class Simulator:
             st.mjSTATE_QFRC_APPLIED.value if self._force_noise else 0)
         self._ncontrol = mujoco.mj_stateSize(self.model, self._control_spec)
         self._nthread = thread_count(nthread)
-        self._rollout: mj_rollout.Rollout | None = None
-        if backend == "rollout":
-            self._rollout = mj_rollout.Rollout(nthread=self._nthread if self._nthread > 1 else 0)
-            self._datas = [mujoco.MjData(self.model) for _ in range(max(1, self._nthread))]
+        self._physics: BatchPhysics | None = None        # made for the batch's capacity
+        self._closed = False
         self._data = mujoco.MjData(self.model)
         self._linear = _LinearPlant(plant, scenario.plant, self.h, self.k) \
             if scenario.plant != "mujoco" else None
@@ -328,9 +325,9 @@ class Simulator:
 
     # ---- lifecycle ---------------------------------------------------------------------------
     def close(self) -> None:
-        if self._rollout is not None:
-            self._rollout.close()
-            self._rollout = None
+        """Release the physics batch and its threads; a closed simulator cannot step."""
+        self._closed = True
+        self._physics = None
 
     def __enter__(self) -> Simulator:
         return self
@@ -340,7 +337,7 @@ class Simulator:
 
     def __getstate__(self) -> dict[str, object]:
         state = self.__dict__.copy()
-        state["_rollout"] = None                 # a thread pool does not pickle
+        state["_physics"] = None                 # a thread pool does not pickle
         state.pop("_row0", None)                 # views: pickled, they would become copies
         return state
 
@@ -348,23 +345,20 @@ class Simulator:
         self.__dict__.update(state)
         if self._capacity:
             self._row0 = _RowViews(self, self.k)
-        if self.backend == "rollout":
-            self._rollout = mj_rollout.Rollout(nthread=self._nthread if self._nthread > 1 else 0)
+            self._make_physics()
 
-    def __del__(self) -> None:  # the rollout pool owns threads; release them with the object
-        try:
-            self.close()
-        except Exception:
-            pass
+    def _make_physics(self) -> None:
+        if self.backend == "rollout" and not self._closed:
+            self._physics = BatchPhysics(self.plant, self._capacity, self._nthread, self.k)
+            if self._row_models is not None:
+                self._physics.set_models(self._row_models)
 
     def _ensure_capacity(self, n: int) -> None:
         if n <= self._capacity:
             return
         self._capacity = n
-        self._models = [self.model] * n
-        self._state_out = np.empty((n, self.k, self._nstate))
+        self._make_physics()
         self._ctrl_buf = np.zeros((n, self.k, self._ncontrol))
-        self._init_buf = np.zeros((n, self._nstate))     # only the x columns are ever written
         # one period of each row, z = [x, u]: at the start | after each of the k physics steps |
         # at the end (after state noise); u is held over steps 0 … k−1 and 0 after them
         self._period_buf = np.zeros((n, self.k + 2, 5))
@@ -509,36 +503,56 @@ class Simulator:
         return self._finish_period(buf, u, x_hat, failed, reason, fail_step)
 
     def _step_single(self, u: float, x_hat: np.ndarray | None) -> StepResult:
-        """:meth:`step` for one row (a single gymnasium env, a one-episode run): the same physics
-        call, failure rule and cost as the batch, without the batch's plumbing (per-row masks,
-        broadcasts and fancy indexing cost more than the arithmetic for one row; the views of row
-        0 are made once). ``u`` is the saturated, finite force."""
-        if self._rollout is None:
-            raise PendulumLQGError("simulator: closed (its rollout threads were released by "
-                                   "close()); make a new one")
+        """:meth:`step` for one row (a one-episode run): :meth:`_period_single`, then the same
+        metrics as the batch."""
+        buf, failed, reason, fail_step = self._period_single(u)
+        return self._finish_period(buf, np.array([u]), x_hat, failed, reason, fail_step)
+
+    def _period_single(self, u: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                 np.ndarray | None]:
+        """One period of row 0 into its buffer: the same physics call and failure rule as the
+        batch, without the batch's plumbing (per-row masks, broadcasts and fancy indexing cost
+        more than the arithmetic for one row; the views of row 0 are made once). ``u`` is the
+        saturated, finite force. Returns ``(buf, failed, reason, fail_step)`` as
+        :meth:`_detect_failure` does."""
+        physics = self._physics
+        if physics is None:
+            raise _closed_error()
         v = self._row0
         x = self.x[0]
-        v.init_x[...] = x
-        v.ctrl_u[...] = u
-        if self._force_noise:
-            v.ctrl[0, :, v.force_cols] = self.noise.forces(self._w)[0].T
-        self._rollout.rollout(v.models, self._datas, v.init, v.ctrl,
-                              control_spec=self._control_spec, skip_checks=True, nstep=self.k,
-                              state=v.state_out, chunk_size=None)
+        forces = self.noise.forces(self._w)[:1] if self._force_noise else None
+        reset = physics.advance_one(x, u, forces, v.period_states, self._ctrl_buf)
         v.start[...] = x
-        v.states[...] = v.out_states
         v.u[...] = u
         if self._state_noise:
             np.add(v.last, self._w[0], out=v.end)
         else:
             v.end[...] = v.last
-        reset = bool(v.out_time[-1] < (self.k - 0.5) * self.h)
         buf = v.buf
-        if not reset and self._within_limits(buf):
-            failed, reason, fail_step = np.zeros(1, dtype=bool), np.zeros(1, dtype=np.int8), None
-        else:
-            failed, reason, fail_step = self._detect_failure(buf, np.array([reset]))
-        return self._finish_period(buf, np.array([u]), x_hat, failed, reason, fail_step)
+        if not reset and _scaled_max_below_one(np.abs(v.tail, out=v.scratch), self._inv_limits_flat):
+            return buf, _NOT_FAILED, _NO_REASON, None       # _within_limits on row 0's views
+        return (buf, *self._detect_failure(buf, np.array([reset])))
+
+    def step_one(self, u: float) -> tuple[float, int]:
+        """One control period of a one-row simulator (the single gymnasium env) with the force
+        ``u`` [N] requested. Returns the period's cost and the failure code (``FAIL_NONE`` while
+        the episode runs); ``self.x``, ``self.t`` and ``self.period`` advance as in :meth:`step`,
+        which it equals. Plain sensing and actuation without streamed metrics (the env's default)
+        take the lean single-row path (no :class:`StepResult`, no metric arrays); anything else,
+        and a non-finite force, goes through :meth:`step`."""
+        if self.n != 1:
+            raise PendulumLQGError(f"step_one: needs a one-row simulator, this one has {self.n} rows")
+        if not (self._single_row_path and self.metrics is None and math.isfinite(u)):
+            res = self.step(np.array([u]))
+            return float(res.cost[0]), int(res.reason[0])
+        u = min(max(u, -self.u_max), self.u_max)
+        buf, _, reason, fail_step = self._period_single(u)
+        k = self.k
+        cost = float(period_integrals(self._row0.z, fail_step, h=self.h, weights=self.weights)[2][0])
+        self.t = self.t + self.dt
+        self.period = self.period + 1
+        self.x = buf[:, k + 1, :4].copy()
+        return cost, int(reason[0])
 
     def _finish_period(self, buf: np.ndarray, u: np.ndarray, x_hat: np.ndarray | None,
                        failed: np.ndarray, reason: np.ndarray, fail_step: np.ndarray | None,
@@ -601,6 +615,8 @@ class Simulator:
                 assert self._row_models is not None
                 for r, m in zip(np.asarray(rows).tolist(), models, strict=True):
                     self._row_models[r] = m
+            if self._physics is not None:
+                self._physics.set_models(self._row_models)
         if self._drops is not None:
             self._drops.reset(children, rows)
 
@@ -639,6 +655,8 @@ class Simulator:
         self._force = self._force[rows]
         if self._row_models is not None:
             self._row_models = [self._row_models[r] for r in np.asarray(rows).tolist()]
+            if self._physics is not None:
+                self._physics.set_models(self._row_models)
         if self._drops is not None:
             self._drops.select(rows)
 
@@ -646,27 +664,9 @@ class Simulator:
     def _advance_rollout(self, u: np.ndarray, forces: np.ndarray | None, out: np.ndarray,
                          ) -> np.ndarray:
         """k physics steps of every row into ``out`` (n, k, 4); returns the rows MuJoCo reset."""
-        n = self.n
-        if self._rollout is None:
-            raise PendulumLQGError("simulator: closed (its rollout threads were released by "
-                                   "close()); make a new one")
-        init = self._init_buf[:n]
-        init[:, self._state_slice] = self.x
-        ctrl = self._ctrl_buf[:n]
-        ctrl[:, :, 0] = u[:, None] if u.ndim == 1 else u     # held, or per physics step (lag)
-        if forces is not None:
-            ctrl[:, :, 1:][:, :, self.plant.qvel_index] = forces
-        state_out = self._state_out[:n]
-        chunk = rollout_chunk(n, self._nthread, self.k)
-        models = self._row_models if self._row_models is not None else (
-            self._models if n == self._capacity else self._models[:n])
-        self._rollout.rollout(models,
-                              self._datas, init, ctrl, control_spec=self._control_spec,
-                              skip_checks=True, nstep=self.k, state=state_out, chunk_size=chunk)
-        out[...] = state_out[:, :, self._state_slice]
-        # MuJoCo resets the data (time back to 0) when the integration goes unstable, so the
-        # last step's time falls short of k·h.
-        return state_out[:, -1, self._time_col] < (self.k - 0.5) * self.h
+        if self._physics is None:
+            raise _closed_error()
+        return self._physics.advance(self.n, self.x, u, forces, out, self._ctrl_buf)
 
     def _advance_step(self, u: np.ndarray, forces: np.ndarray | None, out: np.ndarray,
                       ) -> np.ndarray:
@@ -707,8 +707,7 @@ class Simulator:
         nan, and a nan fails the comparison)."""
         n = buf.shape[0]
         scaled = np.abs(buf[:, 1:], out=self._scratch[:n]).reshape(n, -1)
-        scaled *= self._inv_limits_flat      # (k+1)·5 wide: numpy's inner loop is not 5 long
-        return bool(scaled.max() < 1.0 - 1e-12)
+        return _scaled_max_below_one(scaled, self._inv_limits_flat)
 
     def _detect_failure(self, buf: np.ndarray, reset_flag: np.ndarray,
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -742,21 +741,162 @@ class Simulator:
         return failed, reason, None
 
 
+def _scaled_max_below_one(absolute: np.ndarray, inv_limits_flat: np.ndarray) -> bool:
+    """``max(|z| / limit) < 1 − 1e-12`` over a period's (n, k+1, 5) ``|z|`` (scaled in place;
+    (k+1)·5 wide rows: numpy's inner loop is not 5 long)."""
+    scaled = absolute.reshape(absolute.shape[0], -1)
+    scaled *= inv_limits_flat
+    return bool(scaled.max() < 1.0 - 1e-12)
+
+
 class _RowViews:
     """Views of row 0 of a simulator's buffers, made once for :meth:`Simulator._step_single`."""
 
     def __init__(self, sim: Simulator, k: int) -> None:
-        self.models = sim._models[:1]
-        self.init, self.ctrl = sim._init_buf[:1], sim._ctrl_buf[:1]
-        self.state_out, self.buf = sim._state_out[:1], sim._period_buf[:1]
-        self.init_x = self.init[0, sim._state_slice]
-        self.ctrl_u = self.ctrl[0, :, 0]
-        self.force_cols = 1 + sim.plant.qvel_index        # qfrc_applied columns (force noise)
-        self.out_states = self.state_out[0, :, sim._state_slice]
-        self.out_time = self.state_out[0, :, sim._time_col]
+        self.buf = sim._period_buf[:1]
+        self.period_states = self.buf[:, 1:k + 1, :4]
+        self.z, self.tail = self.buf[:, :k], self.buf[:, 1:]
+        self.scratch = sim._scratch[:1]
         b = self.buf[0]
-        self.start, self.states, self.u = b[0, :4], b[1:k + 1, :4], b[:k, 4]
+        self.start, self.u = b[0, :4], b[:k, 4]
         self.last, self.end = b[k, :4], b[k + 1, :4]
+
+
+class BatchPhysics:
+    """The physics of a batch of rows: ``mujoco.batch.Batch`` (MuJoCo ≥ 4), one simulation a row.
+
+    Each period starts every row from a freshly reset ``MjData`` state (``mj_resetData``: time 0,
+    no warm start) with the row's ``[p, θ, ṗ, θ̇]`` written in, exactly as the ``mj_step`` backend
+    does, so the two give bit-identical states. ``Batch.rollout`` then runs the k physics steps on
+    the batch's threads (the calling thread among them, the GIL released) and records only
+    ``qpos`` and ``qvel`` after each step — the failure rule and the cost need nothing else. A row
+    whose MuJoCo warnings rise (an instability: MuJoCo resets its data) stops there and repeats
+    its last record; its time then falls short of ``k·h``, which is how :meth:`advance` reports it.
+
+    Parameters
+    ----------
+    plant : the nominal plant (its model is the batch's; rows may run other models of the same
+        layout, :meth:`set_models`)
+    capacity : rows; nthread : threads, the caller's included (0 or 1: the caller alone)
+    k : physics steps per period
+    """
+
+    def __init__(self, plant: Plant, capacity: int, nthread: int, k: int) -> None:
+        m = plant.model
+        st = mujoco.mjtState
+        self.model, self.capacity, self.k = m, capacity, k
+        self.batch = Batch(m, capacity, nthread=max(1, nthread))
+        spec = st.mjSTATE_INTEGRATION.value
+        d = mujoco.MjData(m)
+        mujoco.mj_resetData(m, d)
+        #: the state row of a reset MjData: each period starts from it
+        self.state0 = np.empty(self.batch.nstate)
+        mujoco.mj_getState(m, d, self.state0, spec)
+
+        def offset(component: int) -> int:      # the state vector is in component-bit order
+            return int(mujoco.mj_stateSize(m, spec & (component - 1)))
+
+        qpos0, qvel0 = offset(st.mjSTATE_QPOS.value), offset(st.mjSTATE_QVEL.value)
+        self.ctrl_col = offset(st.mjSTATE_CTRL.value)
+        self.x_cols = _maybe_slice(np.concatenate([qpos0 + plant.qpos_index,
+                                                   qvel0 + plant.qvel_index]))
+        self.record_spec = int(st.mjSTATE_QPOS | st.mjSTATE_QVEL)
+        self.record = (self.record_spec,)
+        self.rec = np.empty((capacity, k, m.nq + m.nv))
+        self.rec_cols = _maybe_slice(np.concatenate([plant.qpos_index, m.nq + plant.qvel_index]))
+        self.control_spec = st.mjSTATE_CTRL.value
+        self.force_control_spec = int(st.mjSTATE_CTRL | st.mjSTATE_QFRC_APPLIED)
+        self.force_cols = 1 + plant.qvel_index             # qfrc_applied's columns in a control row
+        self.reset_before = (k - 0.5) * plant.timestep
+        self._ids: dict[int, np.ndarray | None] = {capacity: None}
+        # row 0 alone (advance_one)
+        self._state1 = self.batch.state[0]
+        self._ids1 = None if capacity == 1 else np.zeros(1, dtype=np.int32)
+        self._records1 = [(None, self.record_spec, self.rec[:1])]
+        #: row 0's records as [p, θ, ṗ, θ̇] (a view when the columns are consecutive)
+        self._rec1 = self.rec[:1, :, self.rec_cols] if isinstance(self.rec_cols, slice) else None
+
+    def _rollout(self, ids: np.ndarray | None, control: np.ndarray | None, spec: int,
+                 records: list[tuple[None, int, np.ndarray]]) -> None:
+        """``Batch.rollout`` of k steps recording ``records`` (``[(None, state spec, (n, k, ·)
+        C-contiguous float64 array)]``) for the simulations ``ids`` (int32, or None for all).
+
+        The arguments are built once and valid by construction, so on the MuJoCo release whose
+        ``Batch`` internals were checked (4.0) the call goes straight to its C++ core, skipping
+        the per-call validation of the Python wrapper (2 µs, a tenth of a single env's step);
+        any other release takes the public method."""
+        if _DIRECT_BATCH:
+            nfail = self.batch._b.rollout(ids, self.k, control, spec, records)
+            if nfail:
+                self.batch._check(ids, nfail)          # raises mujoco.batch.SimulationError
+            return
+        _, record, out = records[0]
+        self.batch.rollout(self.k, control, control_spec=spec, record=(record,), ids=ids,
+                           out={record: out})
+
+    def set_models(self, models: list[mujoco.MjModel]) -> None:
+        """Run row i on ``models[i]`` (randomised models); rows beyond them run the nominal one."""
+        self.batch.set_models(list(models) + [self.model] * (self.capacity - len(models)))
+
+    def advance_one(self, x: np.ndarray, u: float, forces: np.ndarray | None, out: np.ndarray,
+                    ctrl_buf: np.ndarray) -> bool:
+        """:meth:`advance` of row 0 alone, ``x`` (4,), ``u`` a float held over the period, ``out``
+        (1, k, 4); returns whether MuJoCo reset the row."""
+        if forces is not None:
+            return bool(self.advance(1, x[None], u, forces, out, ctrl_buf)[0])
+        state = self._state1
+        state[...] = self.state0
+        state[self.x_cols] = x
+        state[self.ctrl_col] = u
+        self._rollout(self._ids1, None, self.control_spec, self._records1)
+        out[...] = self._rec1 if self._rec1 is not None else self.rec[:1, :, self.rec_cols]
+        return bool(state[0] < self.reset_before)
+
+    def advance(self, n: int, x: np.ndarray, u: np.ndarray | float, forces: np.ndarray | None,
+                out: np.ndarray, ctrl_buf: np.ndarray) -> np.ndarray:
+        """k physics steps of rows ``0 … n−1`` from states ``x`` (n, 4) into ``out`` (n, k, 4).
+
+        ``u``: the force of each row held over the period (n,), or one per physics step (n, k)
+        (actuator lag); ``forces``: generalised forces (n, k, 2) on slider and hinge per physics
+        step (force noise) or None; ``ctrl_buf``: a (≥ n, k, ·) scratch for the per-step
+        controls. Returns the rows MuJoCo reset (an instability), (n,) bool.
+        """
+        state = self.batch.state[:n]
+        state[...] = self.state0
+        state[:, self.x_cols] = x
+        control, spec = None, self.control_spec
+        if forces is not None or (isinstance(u, np.ndarray) and u.ndim == 2):
+            control = ctrl_buf[:n]
+            control[:, :, 0] = u[:, None] if isinstance(u, np.ndarray) and u.ndim == 1 else u
+            if forces is not None:
+                control[:, :, self.force_cols] = forces
+                spec = self.force_control_spec
+        else:
+            state[:, self.ctrl_col] = u
+        rec = self.rec[:n]
+        if n in self._ids:
+            ids = self._ids[n]
+        else:
+            ids = self._ids[n] = np.arange(n, dtype=np.int32)
+        self._rollout(ids, control, spec, [(None, self.record_spec, rec)])
+        out[...] = rec[:, :, self.rec_cols]
+        return state[:, 0] < self.reset_before
+
+
+#: ``mujoco.batch.Batch``'s C++ rollout is called directly on the release it was checked against.
+_DIRECT_BATCH = mujoco.__version__.split(".")[:2] == ["4", "0"] and hasattr(Batch, "_check")
+
+
+def _maybe_slice(cols: np.ndarray) -> np.ndarray | slice:
+    """``cols`` as a slice when they are consecutive (a slice indexes without copying)."""
+    if np.array_equal(cols, np.arange(cols[0], cols[0] + cols.size)):
+        return slice(int(cols[0]), int(cols[0]) + cols.size)
+    return cols
+
+
+def _closed_error() -> PendulumLQGError:
+    return PendulumLQGError("simulator: closed (its physics threads were released by close()); "
+                            "make a new one")
 
 
 def _as_slice(ids: np.ndarray) -> np.ndarray | slice:

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.metrics import summarize, wilson_interval
 from pendulum_lqg.noise import NoiseModel, NoiseStream
 from pendulum_lqg.policy import OBSERVERS, DesignSpec, design_policy
@@ -285,3 +285,61 @@ def test_max_abs_theta_of_a_failed_episode_includes_the_crossing_sample(plant):
             first = int(np.argmax(theta > scenario.theta_max))
             assert row["max_abs_theta"] == theta[first] > scenario.theta_max
             assert row["time_to_failure"] == pytest.approx(tr.t_physics[first])
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_batch_physics_direct_call_equals_the_public_batch_rollout(plant, monkeypatch):
+    """On MuJoCo 4.0 the core calls ``Batch``'s C++ rollout directly (no per-call validation);
+    the public ``Batch.rollout`` (any other release) gives the same rows bit for bit — batch,
+    single-row path, force noise (per-step controls), an instability and a shrinking batch."""
+    import pendulum_lqg.sim as sim_module
+
+    noise = NoiseModel(process="force", process_density=(1e-3, 1e-4), measurement_variance=1e-4)
+    cases = [(LECTURE.replace(duration=1.0, noise=dataclasses.replace(LECTURE.noise, scale=5.0)),
+              None),
+             (LECTURE.replace(duration=0.5, noise=noise), None),
+             (LECTURE.replace(duration=0.2), np.array(EXTREME_STARTS[:8], dtype=float))]
+
+    def rows(sc, x0):
+        pol = lambda: design_policy(plant, sc.control_period, sc.noise, DesignSpec("dlqr", "kalman"))  # noqa: E731
+        n = 8 if x0 is None else len(x0)
+        batch = run_episodes(plant, sc, pol(), seed=2, episodes=range(n), initial_states=x0).rows
+        one = None if x0 is None else x0[1:2]
+        single = run_episodes(plant, sc, pol(), seed=2, episodes=[1], initial_states=one).rows
+        return _dump(batch + single)
+
+    assert sim_module._DIRECT_BATCH           # the locked MuJoCo release takes the direct call
+    direct = [rows(sc, x0) for sc, x0 in cases]
+    monkeypatch.setattr(sim_module, "_DIRECT_BATCH", False)
+    public = [rows(sc, x0) for sc, x0 in cases]
+    assert direct == public
+    assert any('"success": false' in d for d in direct)       # episodes failed mid-batch
+
+
+def test_step_one_equals_step_on_one_row(plant):
+    """The single env's lean period (``step_one``) and ``step`` on one row: the same states,
+    costs and failure codes, also for a non-finite force (diverged at once)."""
+    from pendulum_lqg.metrics import FAIL_DIVERGED, FAIL_NONE
+
+    sc = LECTURE.replace(duration=3.0, noise=dataclasses.replace(LECTURE.noise, scale=3.0))
+    sims = [Simulator(plant, sc, streamed_metrics=False) for _ in range(2)]
+    for s in sims:
+        s.reset([np.random.default_rng(7)])
+    for j in range(sc.n_periods):
+        u = float(np.sin(0.05 * j) * 12.0)            # saturates at ±10 N now and then
+        y = [s.measure() for s in sims]
+        assert np.array_equal(y[0], y[1])
+        cost, reason = sims[0].step_one(u)
+        res = sims[1].step(np.array([u]))
+        assert cost == float(res.cost[0]) and reason == int(res.reason[0])
+        assert np.array_equal(sims[0].x, sims[1].x) and np.array_equal(sims[0].t, sims[1].t)
+        if reason != FAIL_NONE:
+            break
+    s = Simulator(plant, sc, streamed_metrics=False)
+    s.reset([np.random.default_rng(1)])
+    s.measure()
+    assert s.step_one(float("nan"))[1] == FAIL_DIVERGED
+    many = Simulator(plant, sc, streamed_metrics=False)
+    many.reset([np.random.default_rng(1), np.random.default_rng(2)])
+    with pytest.raises(PendulumLQGError, match="step_one: needs a one-row simulator"):
+        many.step_one(0.0)
