@@ -798,6 +798,12 @@ class BatchPhysics:
 
         qpos0, qvel0 = offset(st.mjSTATE_QPOS.value), offset(st.mjSTATE_QVEL.value)
         self.ctrl_col = offset(st.mjSTATE_CTRL.value)
+        #: the columns a physics step changes — time, qpos, qvel, act, history and warm start
+        #: come before the inputs (ctrl, applied forces, mocap, …), which it only reads; plugin
+        #: state (last) changes too, so a model with plugins resets its whole row
+        plugin = int(mujoco.mj_stateSize(m, st.mjSTATE_PLUGIN.value))
+        self.dynamic = slice(0, self.batch.nstate if plugin else self.ctrl_col)
+        self.state0_dynamic = self.state0[self.dynamic]
         self.x_cols = _maybe_slice(np.concatenate([qpos0 + plant.qpos_index,
                                                    qvel0 + plant.qvel_index]))
         self.record_spec = int(st.mjSTATE_QPOS | st.mjSTATE_QVEL)
@@ -845,7 +851,7 @@ class BatchPhysics:
         if forces is not None:
             return bool(self.advance(1, x[None], u, forces, out, ctrl_buf)[0])
         state = self._state1
-        state[...] = self.state0
+        state[self.dynamic] = self.state0_dynamic            # mj_resetData's values
         state[self.x_cols] = x
         state[self.ctrl_col] = u
         self._rollout(self._ids1, None, self.control_spec, self._records1)
@@ -862,7 +868,7 @@ class BatchPhysics:
         controls. Returns the rows MuJoCo reset (an instability), (n,) bool.
         """
         state = self.batch.state[:n]
-        state[...] = self.state0
+        state[:, self.dynamic] = self.state0_dynamic         # mj_resetData's values
         state[:, self.x_cols] = x
         control, spec = None, self.control_spec
         if forces is not None or (isinstance(u, np.ndarray) and u.ndim == 2):
