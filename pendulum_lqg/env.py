@@ -32,7 +32,7 @@ from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
 from pendulum_lqg.metrics import FAIL_NONE, FAIL_REASONS
 from pendulum_lqg.noise import LECTURE_V, NoiseModel
 from pendulum_lqg.plant import CART_BODY, ModelOverrides, Plant, load_plant
-from pendulum_lqg.sim import Scenario, Simulator
+from pendulum_lqg.sim import Scenario, Simulator, StepResult
 
 ObservationMode = Literal["measurement", "state"]
 OBSERVATION_MODES: tuple[str, ...] = ("measurement", "state")
@@ -680,17 +680,33 @@ class CartPoleLQGVectorEnv(VectorEnv):
             raise PendulumLQGError("step: call reset() before the first step")
         sim, n = self._sim, self.num_envs
         u = self._actions.forces(actions, n)
+        if not self._waiting.any():             # the common case: every sub-env is running
+            res = sim.step(u)
+            self._running_cost += res.cost
+            terminated = res.failed.copy()
+            truncated = sim.period >= self.max_episode_steps          # TimeLimit's rule
+            if not (terminated.any() or truncated.any()):           # ... and keeps running
+                reward = step_reward(res.cost, terminated, self._scale_dt)
+                self._obs = self._observe(self._all)
+                infos = self._infos_all(res.cost, res.reason, self._actions.applied(u))
+                return self._obs.copy(), reward, terminated, truncated, infos
+            return self._step_end(u, res, np.zeros(0, dtype=np.int64), truncated)
         waiting = np.nonzero(self._waiting)[0]
-        if waiting.size:
-            if self.autoreset_mode == AutoresetMode.DISABLED:
-                raise PendulumLQGError(f"step: sub-env(s) {waiting.tolist()} ended; reset them with "
-                                       "reset(options={'reset_mask': mask}) first")
-            sim.park(waiting)                  # NEXT_STEP: their actions are ignored
-            u[waiting] = 0.0
+        if self.autoreset_mode == AutoresetMode.DISABLED:
+            raise PendulumLQGError(f"step: sub-env(s) {waiting.tolist()} ended; reset them with "
+                                   "reset(options={'reset_mask': mask}) first")
+        sim.park(waiting)                      # NEXT_STEP: their actions are ignored
+        u[waiting] = 0.0
         res = sim.step(u)
         self._running_cost += res.cost
+        return self._step_end(u, res, waiting, sim.period >= self.max_episode_steps)
+
+    def _step_end(self, u: np.ndarray, res: StepResult, waiting: np.ndarray,
+                  truncated: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                  np.ndarray, dict[str, Any]]:
+        """The rest of :meth:`step` when some sub-env ends, or waited for its reset."""
+        sim, n = self._sim, self.num_envs
         terminated = res.failed.copy()
-        truncated = sim.period >= self.max_episode_steps          # TimeLimit's rule
         reward = step_reward(res.cost, terminated, self._scale_dt)
         force = self._actions.applied(u)
         cost, reason = res.cost.copy(), res.reason.copy()
@@ -725,6 +741,21 @@ class CartPoleLQGVectorEnv(VectorEnv):
             infos = self._infos(self._all, cost, reason, force)
             self._waiting[ended] = True
         return self._obs.copy(), reward, terminated, truncated, infos
+
+    def _infos_all(self, cost: np.ndarray, reason: np.ndarray, force: np.ndarray,
+                   ) -> dict[str, Any]:
+        """:meth:`_infos` of every sub-env (the common step), without the masked writes."""
+        sim = self._sim
+        state = sim.x.copy()
+        values = {"cost": cost.copy(), "running_cost": self._running_cost.copy(), "state": state,
+                  "y_true": state[:, :2].copy(), "failure_reason": _REASON_NAMES[reason],
+                  "time": sim.t.copy(), "force": force}
+        mask = np.ones(self.num_envs, dtype=bool)
+        out: dict[str, Any] = {}
+        for key, arr in values.items():
+            out[key] = arr
+            out["_" + key] = mask.copy()
+        return out
 
     def _infos(self, rows: np.ndarray, cost: np.ndarray, reason: np.ndarray,
                force: np.ndarray) -> dict[str, Any]:

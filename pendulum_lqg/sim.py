@@ -537,8 +537,9 @@ class Simulator:
         """One control period of a one-row simulator (the single gymnasium env) with the force
         ``u`` [N] requested. Returns the period's cost and the failure code (``FAIL_NONE`` while
         the episode runs); ``self.x``, ``self.t`` and ``self.period`` advance as in :meth:`step`,
-        which it equals. Plain sensing and actuation without streamed metrics (the env's default)
-        take the lean single-row path (no :class:`StepResult`, no metric arrays); anything else,
+        which it equals (here ``x``, ``t`` and ``period`` are updated in place). Plain sensing and
+        actuation without streamed metrics (the env's default) take the lean single-row path (no
+        :class:`StepResult`, no metric arrays); anything else,
         and a non-finite force, goes through :meth:`step`."""
         if self.n != 1:
             raise PendulumLQGError(f"step_one: needs a one-row simulator, this one has {self.n} rows")
@@ -546,12 +547,11 @@ class Simulator:
             res = self.step(np.array([u]))
             return float(res.cost[0]), int(res.reason[0])
         u = min(max(u, -self.u_max), self.u_max)
-        buf, _, reason, fail_step = self._period_single(u)
-        k = self.k
+        _, _, reason, fail_step = self._period_single(u)
         cost = float(period_integrals(self._row0.z, fail_step, h=self.h, weights=self.weights)[2][0])
-        self.t = self.t + self.dt
-        self.period = self.period + 1
-        self.x = buf[:, k + 1, :4].copy()
+        self.t += self.dt               # in place (one row, nobody else holds them): the same
+        self.period += 1                # values as step()'s new arrays, without allocating
+        self.x[0] = self._row0.end
         return cost, int(reason[0])
 
     def _finish_period(self, buf: np.ndarray, u: np.ndarray, x_hat: np.ndarray | None,
