@@ -3,16 +3,18 @@
 Both envs are made with ``gymnasium.make`` (so both carry the same wrappers: TimeLimit,
 OrderEnforcing, PassiveEnvChecker) and run the same number of physics steps per env step: ours
 has h = 1 ms and T = 10 ms (k = 10); InvertedPendulum-v5 gets ``frame_skip=k``. Only the
-``env.step`` calls are timed (action selection and resets are outside the clock). The two envs
-take turns, one timed run each per round, so a change in machine load hits both alike; figures are
-medians over the rounds and the ratio is the median of the per-round ratios. Our env is driven by
-the LQG agent (it balances, the common case); InvertedPendulum-v5 by zero force. A third line times
-the bare physics of our env step (one ``mujoco.rollout`` call of one row, no Python around it), the
-share of ``env.step`` no bookkeeping can remove.
+``env.step`` calls are timed (action selection and resets are outside the clock). In each round
+the two envs take turns block by block (``--blocks`` blocks of ``steps / blocks`` env steps each),
+so a slow spell of the machine hits both alike; figures are medians over the rounds and the ratio
+is the median of the per-round ratios. Our env is driven by the LQG agent (it balances, the common
+case); InvertedPendulum-v5 by zero force. Two more lines time the bare physics of our env step —
+one ``mujoco.rollout`` call of one row, and one ``mujoco.batch`` ``Batch.step`` of one simulation
+(what the simulation core steps), no Python around them — the share of ``env.step`` no
+bookkeeping can remove.
 
 Usage::
 
-    uv run python experiments/env_benchmark.py [--steps 10000] [--repeats 7]
+    uv run python experiments/env_benchmark.py [--steps 10000] [--blocks 20] [--repeats 7]
 """
 
 from __future__ import annotations
@@ -25,33 +27,46 @@ import numpy as np
 
 import pendulum_lqg
 from pendulum_lqg.agent import LQGAgent
-from pendulum_lqg.perf import raw_rollout_rate
+from pendulum_lqg.perf import raw_batch_rate, raw_rollout_rate
 
 
-def time_steps(env: gym.Env, steps: int, policy: object | None, seed: int) -> float:
-    """Seconds spent inside ``env.step`` over ``steps`` steps (resets are not timed)."""
-    obs, _ = env.reset(seed=seed)
-    if policy is not None:
-        policy.reset()
-    zero = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
-    clock = time.perf_counter
-    spent = 0.0
-    for _ in range(steps):
-        action = policy.act(obs) if policy is not None else zero
-        t0 = clock()
-        obs, _, terminated, truncated, _ = env.step(action)
-        spent += clock() - t0
-        if terminated or truncated:
-            obs, _ = env.reset()
-            if policy is not None:
-                policy.reset()
-    return spent
+class Runner:
+    """Steps one env with its policy, across calls (an episode continues where it stopped)."""
+
+    def __init__(self, env: gym.Env, policy: object | None) -> None:
+        self.env, self.policy = env, policy
+        self.zero = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+
+    def reset(self, seed: int) -> None:
+        self.obs, _ = self.env.reset(seed=seed)
+        if self.policy is not None:
+            self.policy.reset()
+
+    def time_steps(self, steps: int) -> float:
+        """Seconds spent inside ``env.step`` over ``steps`` steps (resets are not timed)."""
+        env, policy, zero = self.env, self.policy, self.zero
+        clock = time.perf_counter
+        spent = 0.0
+        obs = self.obs
+        for _ in range(steps):
+            action = policy.act(obs) if policy is not None else zero
+            t0 = clock()
+            obs, _, terminated, truncated, _ = env.step(action)
+            spent += clock() - t0
+            if terminated or truncated:
+                obs, _ = env.reset()
+                if policy is not None:
+                    policy.reset()
+        self.obs = obs
+        return spent
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--steps", type=int, default=10000, help="env steps per timed run")
-    ap.add_argument("--repeats", type=int, default=7, help="rounds (one timed run per env each)")
+    ap.add_argument("--steps", type=int, default=10000, help="env steps per env and round")
+    ap.add_argument("--blocks", type=int, default=20,
+                    help="blocks per round, the envs alternating block by block")
+    ap.add_argument("--repeats", type=int, default=7, help="rounds")
     args = ap.parse_args()
 
     ours = gym.make(pendulum_lqg.ENV_ID)
@@ -59,22 +74,35 @@ def main() -> None:
     agent = LQGAgent(ours)
     theirs = gym.make("InvertedPendulum-v5", frame_skip=k)
     assert theirs.unwrapped.frame_skip == k
-    contenders = (("CartPoleLQG-v0", ours, agent), ("InvertedPendulum-v5", theirs, None))
-    for _, env, policy in contenders:
-        time_steps(env, 500, policy, seed=1)     # warm-up
-    print(f"{args.steps} env.step calls per run, {args.repeats} rounds, seeds 0..{args.repeats - 1}, "
-          f"{k} physics steps per env step")
-    runs: dict[str, list[float]] = {name: [] for name, _, _ in contenders}
+    runners = {"CartPoleLQG-v0": Runner(ours, agent), "InvertedPendulum-v5": Runner(theirs, None)}
+    block = max(1, args.steps // args.blocks)
+    for runner in runners.values():                  # warm-up
+        runner.reset(seed=1)
+        runner.time_steps(500)
+    print(f"{block * args.blocks} env.step calls per env and round, in {args.blocks} alternating "
+          f"blocks of {block}; {args.repeats} rounds, seeds 0..{args.repeats - 1}, {k} physics "
+          "steps per env step")
+    runs: dict[str, list[float]] = {name: [] for name in runners}
+    runs["physics: rollout"], runs["physics: batch"] = [], []
     for r in range(args.repeats):
-        for name, env, policy in contenders:
-            runs[name].append(args.steps * k / time_steps(env, args.steps, policy, seed=r))
-        runs.setdefault("physics only", []).append(
-            raw_rollout_rate(ours.unwrapped.plant, 1, k, 0, calls=args.steps, outputs=False))
+        spent = dict.fromkeys(runners, 0.0)
+        for runner in runners.values():
+            runner.reset(seed=r)
+        for _ in range(args.blocks):             # the two envs take turns block by block, so a
+            for name, runner in runners.items():  # slow spell of the machine hits both alike
+                spent[name] += runner.time_steps(block)
+        for name in runners:
+            runs[name].append(block * args.blocks * k / spent[name])
+        plant = ours.unwrapped.plant
+        runs["physics: rollout"].append(
+            raw_rollout_rate(plant, 1, k, 0, calls=args.steps, outputs=False))
+        runs["physics: batch"].append(raw_batch_rate(plant, 1, k, 1, calls=args.steps))
         print(f"round {r + 1}/{args.repeats}: " + ", ".join(
             f"{name} {v[-1]:,.0f}" for name, v in runs.items()) + " physics steps/s")
     for name, rates in runs.items():
         med = float(np.median(rates))
-        what = "bare mujoco.rollout of 1 row" if name == "physics only" else "env.step"
+        what = {"physics: rollout": "bare mujoco.rollout of 1 row",
+                "physics: batch": "bare Batch.step of 1 simulation"}.get(name, "env.step")
         print(f"{name:>20}: {med:12,.0f} physics steps/s ({k / med * 1e6:6.1f} µs per {what}, "
               f"{k} physics steps each; runs {min(rates):,.0f}–{max(rates):,.0f})")
     rounds = [a / b for a, b in zip(runs["CartPoleLQG-v0"], runs["InvertedPendulum-v5"], strict=True)]

@@ -283,11 +283,11 @@ class Simulator:
         self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h)
         #: h·[diag(Q), R]: the cost of a period is Σ weights·z² over its physics steps, z = [x, u]
         self.weights = self.h * np.append(scenario.cost_Q, scenario.cost_R)
-        #: 1 / [track, theta_max, RUNAWAY, RUNAWAY, 2·u_max]: the failure check's fast path (a
-        #: saturated force passes it; a nan one does not)
-        self._inv_limits = 1.0 / np.array([self.track, scenario.theta_max, RUNAWAY, RUNAWAY,
-                                           2.0 * self.u_max])
-        self._inv_limits_flat = np.tile(self._inv_limits, self.k + 1)
+        #: [track, theta_max, RUNAWAY, RUNAWAY, 2·u_max] for each of the k+1 rows after a
+        #: period's start: the failure check's fast path (a saturated force passes it; a nan
+        #: one does not)
+        self._limits_rows = np.tile(np.array([self.track, scenario.theta_max, RUNAWAY, RUNAWAY,
+                                              2.0 * self.u_max]), (self.k + 1, 1))
         self._force_noise = scenario.noise.process == "force" and self.noise.enabled
         self._state_noise = scenario.noise.process == "state" and self.noise.enabled
         st = mujoco.mjtState
@@ -362,7 +362,8 @@ class Simulator:
         # one period of each row, z = [x, u]: at the start | after each of the k physics steps |
         # at the end (after state noise); u is held over steps 0 … k−1 and 0 after them
         self._period_buf = np.zeros((n, self.k + 2, 5))
-        self._scratch = np.empty((n, self.k + 1, 5))     # |z| / limit of the failure check
+        self._scratch = np.empty((n, self.k + 1, 5))     # |z| of the failure check
+        self._inside = np.empty((n, self.k + 1, 5), dtype=bool)    # |z| < limit
         self._row0 = _RowViews(self, self.k)
 
     # ---- episodes ----------------------------------------------------------------------------
@@ -523,13 +524,13 @@ class Simulator:
         forces = self.noise.forces(self._w)[:1] if self._force_noise else None
         reset = physics.advance_one(x, u, forces, v.period_states, self._ctrl_buf)
         v.start[...] = x
-        v.u[...] = u
+        v.u.fill(u)
         if self._state_noise:
             np.add(v.last, self._w[0], out=v.end)
         else:
             v.end[...] = v.last
         buf = v.buf
-        if not reset and _scaled_max_below_one(np.abs(v.tail, out=v.scratch), self._inv_limits_flat):
+        if not reset and _all_inside(np.abs(v.tail, out=v.scratch), self._limits_rows, v.inside):
             return buf, _NOT_FAILED, _NO_REASON, None       # _within_limits on row 0's views
         return (buf, *self._detect_failure(buf, np.array([reset])))
 
@@ -549,8 +550,8 @@ class Simulator:
         u = min(max(u, -self.u_max), self.u_max)
         _, _, reason, fail_step = self._period_single(u)
         cost = float(period_integrals(self._row0.z, fail_step, h=self.h, weights=self.weights)[2][0])
-        self.t += self.dt               # in place (one row, nobody else holds them): the same
-        self.period += 1                # values as step()'s new arrays, without allocating
+        self.t[0] += self.dt            # in place, element-wise (one row, nobody else holds them):
+        self.period[0] += 1             # step()'s values without a ufunc call or an allocation
         self.x[0] = self._row0.end
         return cost, int(reason[0])
 
@@ -701,13 +702,12 @@ class Simulator:
         return reset_flag
 
     def _within_limits(self, buf: np.ndarray) -> bool:
-        """The failure check's fast path, the common case: every ``|x_i| / limit_i`` of the
-        period's states (the end state too, a stricter test than its own) below ``1 − 1e-12``, so
-        the full checks of :meth:`_detect_failure` would find no failure (numpy's max keeps a
-        nan, and a nan fails the comparison)."""
+        """The failure check's fast path, the common case: every ``|x_i| < limit_i`` over the
+        period's states (the end state too, a stricter test than its own), so the full checks of
+        :meth:`_detect_failure` would find no failure (a nan fails the comparison)."""
         n = buf.shape[0]
-        scaled = np.abs(buf[:, 1:], out=self._scratch[:n]).reshape(n, -1)
-        return _scaled_max_below_one(scaled, self._inv_limits_flat)
+        return _all_inside(np.abs(buf[:, 1:], out=self._scratch[:n]), self._limits_rows,
+                           self._inside[:n])
 
     def _detect_failure(self, buf: np.ndarray, reset_flag: np.ndarray,
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -741,12 +741,12 @@ class Simulator:
         return failed, reason, None
 
 
-def _scaled_max_below_one(absolute: np.ndarray, inv_limits_flat: np.ndarray) -> bool:
-    """``max(|z| / limit) < 1 − 1e-12`` over a period's (n, k+1, 5) ``|z|`` (scaled in place;
-    (k+1)·5 wide rows: numpy's inner loop is not 5 long)."""
-    scaled = absolute.reshape(absolute.shape[0], -1)
-    scaled *= inv_limits_flat
-    return bool(scaled.max() < 1.0 - 1e-12)
+def _all_inside(absolute: np.ndarray, limits_rows: np.ndarray, inside: np.ndarray) -> bool:
+    """Every entry of a period's (n, k+1, 5) ``|z|`` strictly below its limit (``inside``: a
+    bool scratch of that shape). ``count_nonzero`` is a plain C count, a fraction of a ufunc
+    reduction's cost (``all``/``max``) on small arrays."""
+    np.less(absolute, limits_rows, out=inside)
+    return bool(np.count_nonzero(inside) == inside.size)
 
 
 class _RowViews:
@@ -756,7 +756,7 @@ class _RowViews:
         self.buf = sim._period_buf[:1]
         self.period_states = self.buf[:, 1:k + 1, :4]
         self.z, self.tail = self.buf[:, :k], self.buf[:, 1:]
-        self.scratch = sim._scratch[:1]
+        self.scratch, self.inside = sim._scratch[:1], sim._inside[:1]
         b = self.buf[0]
         self.start, self.u = b[0, :4], b[:k, 4]
         self.last, self.end = b[k, :4], b[k + 1, :4]
