@@ -481,16 +481,16 @@ class Simulator:
             u, u_steps = self._actuate(u)
         buf = self._period_buf[:n]
         buf[:, 0, :4] = self.x
-        buf[:, :k, 4] = u[:, None] if u_steps is None else u_steps
         states = buf[:, 1:k + 1, :4]
         forces = self.noise.forces(self._w) if self._force_noise else None
         held = u if u_steps is None else u_steps
         if self._linear is not None:
             reset_flag = self._linear.advance(self.x, u, states)
         elif self.backend == "rollout":
-            reset_flag = self._advance_rollout(held, forces, states)
+            reset_flag = self._advance_rollout(held, forces, buf)
         else:
             reset_flag = self._advance_step(held, forces, states)
+        buf[:, :k, 4] = u[:, None] if u_steps is None else u_steps  # after the physics
         # state noise: one jump per period at its end (x ← x + δx)
         if self._state_noise:
             np.add(buf[:, k, :4], self._w, out=buf[:, k + 1, :4])
@@ -522,7 +522,7 @@ class Simulator:
         v = self._row0
         x = self.x[0]
         forces = self.noise.forces(self._w)[:1] if self._force_noise else None
-        reset = physics.advance_one(x, u, forces, v.period_states, self._ctrl_buf)
+        reset = physics.advance_one(x, u, forces, v.buf, self._ctrl_buf)
         v.start[...] = x
         v.u.fill(u)
         if self._state_noise:
@@ -662,12 +662,13 @@ class Simulator:
             self._drops.select(rows)
 
     # ---- physics -----------------------------------------------------------------------------
-    def _advance_rollout(self, u: np.ndarray, forces: np.ndarray | None, out: np.ndarray,
+    def _advance_rollout(self, u: np.ndarray, forces: np.ndarray | None, buf: np.ndarray,
                          ) -> np.ndarray:
-        """k physics steps of every row into ``out`` (n, k, 4); returns the rows MuJoCo reset."""
+        """k physics steps of every row into the period buffer ``buf`` (n, k+2, 5) (see
+        :meth:`BatchPhysics.advance`); returns the rows MuJoCo reset."""
         if self._physics is None:
             raise _closed_error()
-        return self._physics.advance(self.n, self.x, u, forces, out, self._ctrl_buf)
+        return self._physics.advance(self.n, self.x, u, forces, buf, self._ctrl_buf)
 
     def _advance_step(self, u: np.ndarray, forces: np.ndarray | None, out: np.ndarray,
                       ) -> np.ndarray:
@@ -754,7 +755,6 @@ class _RowViews:
 
     def __init__(self, sim: Simulator, k: int) -> None:
         self.buf = sim._period_buf[:1]
-        self.period_states = self.buf[:, 1:k + 1, :4]
         self.z, self.tail = self.buf[:, :k], self.buf[:, 1:]
         self.scratch, self.inside = sim._scratch[:1], sim._inside[:1]
         b = self.buf[0]
@@ -806,9 +806,18 @@ class BatchPhysics:
         self.state0_dynamic = self.state0[self.dynamic]
         self.x_cols = _maybe_slice(np.concatenate([qpos0 + plant.qpos_index,
                                                    qvel0 + plant.qvel_index]))
-        self.record_spec = int(st.mjSTATE_QPOS | st.mjSTATE_QVEL)
-        self.record = (self.record_spec,)
-        self.rec = np.empty((capacity, k, m.nq + m.nv))
+        #: [p, θ, ṗ, θ̇] are qpos and qvel as they lie in MjData (the shipped model): each step
+        #: is recorded as [time, p, θ, ṗ, θ̇], five numbers like a row of the period buffer
+        #: [p, θ, ṗ, θ̇, u] one place later, so the k records land in rows 1 … k of the buffer as
+        #: one copy of 5k consecutive numbers per row (see :meth:`advance`)
+        self.aligned = (m.nq == 2 and m.nv == 2 and list(plant.qpos_index) == [0, 1]
+                        and list(plant.qvel_index) == [0, 1])
+        if self.aligned:
+            self.record_spec = int(st.mjSTATE_TIME | st.mjSTATE_QPOS | st.mjSTATE_QVEL)
+            self.rec = np.empty((capacity, k, 5))
+        else:
+            self.record_spec = int(st.mjSTATE_QPOS | st.mjSTATE_QVEL)
+            self.rec = np.empty((capacity, k, m.nq + m.nv))
         self.rec_cols = _maybe_slice(np.concatenate([plant.qpos_index, m.nq + plant.qvel_index]))
         self.control_spec = st.mjSTATE_CTRL.value
         self.force_control_spec = int(st.mjSTATE_CTRL | st.mjSTATE_QFRC_APPLIED)
@@ -819,8 +828,7 @@ class BatchPhysics:
         self._state1 = self.batch.state[0]
         self._ids1 = None if capacity == 1 else np.zeros(1, dtype=np.int32)
         self._records1 = [(None, self.record_spec, self.rec[:1])]
-        #: row 0's records as [p, θ, ṗ, θ̇] (a view when the columns are consecutive)
-        self._rec1 = self.rec[:1, :, self.rec_cols] if isinstance(self.rec_cols, slice) else None
+        self._rec1_flat = self.rec[:1].reshape(1, -1)
 
     def _rollout(self, ids: np.ndarray | None, control: np.ndarray | None, spec: int,
                  records: list[tuple[None, int, np.ndarray]]) -> None:
@@ -844,23 +852,36 @@ class BatchPhysics:
         """Run row i on ``models[i]`` (randomised models); rows beyond them run the nominal one."""
         self.batch.set_models(list(models) + [self.model] * (self.capacity - len(models)))
 
-    def advance_one(self, x: np.ndarray, u: float, forces: np.ndarray | None, out: np.ndarray,
+    def advance_one(self, x: np.ndarray, u: float, forces: np.ndarray | None, buf: np.ndarray,
                     ctrl_buf: np.ndarray) -> bool:
-        """:meth:`advance` of row 0 alone, ``x`` (4,), ``u`` a float held over the period, ``out``
-        (1, k, 4); returns whether MuJoCo reset the row."""
+        """:meth:`advance` of row 0 alone, ``x`` (4,), ``u`` a float held over the period, ``buf``
+        (1, k+2, 5); returns whether MuJoCo reset the row."""
         if forces is not None:
-            return bool(self.advance(1, x[None], u, forces, out, ctrl_buf)[0])
+            return bool(self.advance(1, x[None], u, forces, buf, ctrl_buf)[0])
         state = self._state1
         state[self.dynamic] = self.state0_dynamic            # mj_resetData's values
         state[self.x_cols] = x
         state[self.ctrl_col] = u
         self._rollout(self._ids1, None, self.control_spec, self._records1)
-        out[...] = self._rec1 if self._rec1 is not None else self.rec[:1, :, self.rec_cols]
+        self._store(buf, self._rec1_flat, self.rec[:1])
         return bool(state[0] < self.reset_before)
 
+    def _store(self, buf: np.ndarray, rec_flat: np.ndarray, rec: np.ndarray) -> None:
+        """The k records of each row into rows 1 … k, columns 0 … 3, of the period buffer
+        ``buf`` (n, k+2, 5). Aligned records go in as one run of 5k numbers per row starting at
+        row 0's column 4, so column 4 of rows 0 … k−1 receives the times: the caller writes the
+        forces there afterwards."""
+        n, k = buf.shape[0], self.k
+        if self.aligned:
+            buf.reshape(n, -1)[:, 4:4 + 5 * k] = rec_flat
+        else:
+            buf[:, 1:k + 1, :4] = rec[:, :, self.rec_cols]
+
     def advance(self, n: int, x: np.ndarray, u: np.ndarray | float, forces: np.ndarray | None,
-                out: np.ndarray, ctrl_buf: np.ndarray) -> np.ndarray:
-        """k physics steps of rows ``0 … n−1`` from states ``x`` (n, 4) into ``out`` (n, k, 4).
+                buf: np.ndarray, ctrl_buf: np.ndarray) -> np.ndarray:
+        """k physics steps of rows ``0 … n−1`` from states ``x`` (n, 4) into rows 1 … k of the
+        C-contiguous period buffer ``buf`` (n, k+2, 5), columns 0 … 3; column 4 of rows 0 … k−1
+        may be overwritten (write the forces after this call).
 
         ``u``: the force of each row held over the period (n,), or one per physics step (n, k)
         (actuator lag); ``forces``: generalised forces (n, k, 2) on slider and hinge per physics
@@ -885,7 +906,7 @@ class BatchPhysics:
         else:
             ids = self._ids[n] = np.arange(n, dtype=np.int32)
         self._rollout(ids, control, spec, [(None, self.record_spec, rec)])
-        out[...] = rec[:, :, self.rec_cols]
+        self._store(buf, rec.reshape(n, -1), rec)
         return state[:, 0] < self.reset_before
 
 
