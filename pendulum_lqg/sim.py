@@ -1182,7 +1182,8 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: Any, *, seed: int,
                           initial_states, None)
     parts = np.array_split(np.arange(len(episodes)), shards)
     stop = threading.Event()
-    with ThreadPoolExecutor(max_workers=shards, thread_name_prefix="pendulum-lqg-shard") as pool:
+    with ThreadPoolExecutor(max_workers=min(shards, nthread),
+                            thread_name_prefix="pendulum-lqg-shard") as pool:
         futures = [pool.submit(_run_batch, plant, scenario, copy.deepcopy(policy), seed,
                                [episodes[i] for i in part], backend, 1, trajectory,
                                None if initial_states is None

@@ -1,0 +1,22 @@
+"""``perf``: the baseline is the faster bare physics, the ratio the median of the pair ratios."""
+
+from __future__ import annotations
+
+import statistics
+
+from pendulum_lqg.perf import run_perf
+
+
+def test_perf_baseline_is_the_faster_bare_physics_and_the_ratio_the_median_of_pairs():
+    out = run_perf(episodes=16, duration=0.1, nthread=1, repeats=3)
+    assert len(out["raw_steps_per_s"]) == len(out["closed_loop_steps_per_s"]) == 3
+    for raw, rollout, batch in zip(out["raw_steps_per_s"], out["bare_rollout_steps_per_s"],
+                                   out["bare_batch_steps_per_s"], strict=True):
+        assert raw == max(rollout, batch) > 0
+    pairs = [c / r for c, r in zip(out["closed_loop_steps_per_s"], out["raw_steps_per_s"],
+                                   strict=True)]
+    assert out["pair_ratios"] == pairs
+    assert out["ratio"] == statistics.median(pairs)
+    assert out["episodes"] == 16 and out["steps_per_period"] == 10 and out["repeats"] == 3
+    assert any("target ≥ 0.90" in line for line in out["report"])
+
