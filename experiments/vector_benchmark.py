@@ -1,22 +1,24 @@
 """Throughput of the native vector env vs Gymnasium's SyncVectorEnv at 64 envs.
 
 Both come from ``gymnasium.make_vec("pendulum_lqg/CartPoleLQG-v0", num_envs=N)``: the registered
-vector entry point (one batched ``mujoco.rollout`` per step) and ``vectorization_mode="sync"``
-(N single envs in a Python loop). Both run the same episodes (same seeds, NEXT_STEP autoreset)
-driven by the batched LQG agent; only ``step`` calls are timed.
+vector entry point (one batched ``mujoco.batch`` call per step, the simulation core) and
+``vectorization_mode="sync"`` (N single envs in a Python loop). Both run the same episodes (same
+seeds, NEXT_STEP autoreset) driven by the batched LQG agent; only ``step`` calls are timed.
 
-The physics alone bounds what any vector env can reach: the third line times bare
-``mujoco.rollout`` calls of the same batch, one per env step (N rows × k physics steps, the native
-env's threads and chunking, no state or sensor outputs requested, no Python around them) — a vector
-env must return to Python once per control period. ``native / bare physics`` is the share of that
-ceiling the native env reaches; ``physics / sync`` is the ceiling of the native/sync ratio on this
-machine (with ``c`` cores it grows about like ``c``: the sync env uses one). The three take turns,
-one timed run each per round; figures are medians over the rounds, ratios medians of the per-round
-ratios.
+The physics alone bounds what any vector env can reach. Two more contenders time bare physics of
+the same batch, one call per env step (N simulations × k physics steps, the native env's threads,
+no outputs requested, no Python around them — a vector env must return to Python once per control
+period): ``mujoco.rollout`` calls (with the chunking a rollout-based env would use) and
+``mujoco.batch`` ``Batch.step`` calls with the force written before each. The faster of the two
+is the ceiling: ``native / bare physics`` is the share of it the native env reaches;
+``physics / sync`` is the ceiling of the native/sync ratio on this machine (with ``c`` cores it
+grows about like ``c``: the sync env uses one). In each round the contenders take turns block by
+block (``--blocks`` blocks of ``steps / blocks`` steps), so a slow spell of the machine hits all of
+them alike; figures are medians over the rounds, ratios medians of the per-round ratios.
 
 Usage::
 
-    uv run python experiments/vector_benchmark.py [--num-envs 64] [--steps 300] [--repeats 5]
+    uv run python experiments/vector_benchmark.py [--num-envs 64] [--steps 600] [--blocks 20] [--repeats 5]
 """
 
 from __future__ import annotations
@@ -33,48 +35,69 @@ from pendulum_lqg.perf import raw_batch_rate, raw_rollout_rate
 from pendulum_lqg.sim import rollout_chunk
 
 
-def time_steps(envs: gym.vector.VectorEnv, agent: LQGAgent, steps: int, seed: int) -> float:
-    """Seconds spent inside ``envs.step`` over ``steps`` steps of the whole batch."""
-    obs, _ = envs.reset(seed=seed)
-    agent.reset()
-    clock = time.perf_counter
-    spent = 0.0
-    for _ in range(steps):
-        action = agent.act(obs)
-        t0 = clock()
-        obs, _, terminated, truncated, _ = envs.step(action)
-        spent += clock() - t0
-        agent.reset(np.nonzero(terminated | truncated)[0])
-    return spent
+class Runner:
+    """Steps one vector env with the agent, across calls (episodes continue where they stopped)."""
+
+    def __init__(self, envs: gym.vector.VectorEnv, agent: LQGAgent) -> None:
+        self.envs, self.agent = envs, agent
+
+    def reset(self, seed: int) -> None:
+        self.obs, _ = self.envs.reset(seed=seed)
+        self.agent.reset()
+
+    def time_steps(self, steps: int) -> float:
+        """Seconds spent inside ``envs.step`` over ``steps`` steps of the whole batch."""
+        envs, agent, obs = self.envs, self.agent, self.obs
+        clock = time.perf_counter
+        spent = 0.0
+        for _ in range(steps):
+            action = agent.act(obs)
+            t0 = clock()
+            obs, _, terminated, truncated, _ = envs.step(action)
+            spent += clock() - t0
+            agent.reset(np.nonzero(terminated | truncated)[0])
+        self.obs = obs
+        return spent
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--num-envs", type=int, default=64)
-    ap.add_argument("--steps", type=int, default=300, help="vector steps per timed run")
-    ap.add_argument("--repeats", type=int, default=5, help="rounds (one timed run each)")
+    ap.add_argument("--steps", type=int, default=600, help="vector steps per contender and round")
+    ap.add_argument("--blocks", type=int, default=20,
+                    help="blocks per round, the contenders taking turns block by block")
+    ap.add_argument("--repeats", type=int, default=5, help="rounds")
     args = ap.parse_args()
     n = args.num_envs
     native = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n)
     sync = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n, vectorization_mode="sync")
     k, nthread = native.unwrapped.frame_skip, native.unwrapped.nthread
-    # the sync env's sub-envs are plain single envs: the agent acts on the stacked batch
-    agent = LQGAgent(native)
-    contenders = {"native": native, "sync": sync}
-    for envs in contenders.values():
-        time_steps(envs, agent, 20, seed=0)                     # warm-up
-    print(f"{n} envs, {args.steps} vector steps per run, {args.repeats} rounds, seeds "
-          f"0..{args.repeats - 1}, {k} physics steps per env step, {nthread} rollout threads")
-    rates: dict[str, list[float]] = {"native": [], "sync": [], "rollout": [], "batch": [],
-                                     "physics": []}
+    plant = native.unwrapped.plant
+    # each env has its own agent (the agent keeps per-sub-env estimator state)
+    runners = {"native": Runner(native, LQGAgent(native)), "sync": Runner(sync, LQGAgent(native))}
+    block = max(1, args.steps // args.blocks)
+    chunk = rollout_chunk(n, nthread, k)
+    bare = {"rollout": lambda: raw_rollout_rate(plant, n, k, nthread, calls=block, outputs=False,
+                                                chunk_size=chunk),
+            "batch": lambda: raw_batch_rate(plant, n, k, nthread, calls=block)}
+    for runner in runners.values():
+        runner.reset(seed=0)
+        runner.time_steps(20)                                  # warm-up
+    print(f"{n} envs, {block * args.blocks} vector steps per contender and round in {args.blocks} "
+          f"alternating blocks of {block}, {args.repeats} rounds, seeds 0..{args.repeats - 1}, "
+          f"{k} physics steps per env step, {nthread} physics threads")
+    rates: dict[str, list[float]] = {name: [] for name in (*runners, *bare, "physics")}
     for r in range(args.repeats):
-        for name, envs in contenders.items():
-            rates[name].append(n * args.steps / time_steps(envs, agent, args.steps, seed=r))
-        plant = native.unwrapped.plant
-        rates["rollout"].append(raw_rollout_rate(plant, n, k, nthread, calls=args.steps,
-                                                 outputs=False,
-                                                 chunk_size=rollout_chunk(n, nthread, k)) / k)
-        rates["batch"].append(raw_batch_rate(plant, n, k, nthread, calls=args.steps) / k)
+        spent = dict.fromkeys((*runners, *bare), 0.0)
+        for runner in runners.values():
+            runner.reset(seed=r)
+        for _ in range(args.blocks):
+            for name, runner in runners.items():
+                spent[name] += runner.time_steps(block)
+            for name, rate in bare.items():                  # physics steps/s → seconds
+                spent[name] += block * n * k / rate()
+        for name, secs in spent.items():
+            rates[name].append(n * block * args.blocks / secs)
         rates["physics"].append(max(rates["rollout"][-1], rates["batch"][-1]))
         log = {name: f"{v[-1]:,.0f}" for name, v in rates.items()}
         print(f"round {r + 1}/{args.repeats}: env steps/s {log}")

@@ -177,10 +177,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "pole_mass_scale=0.8:1.2 (repeatable; keys pole_mass_scale, "
                         "pole_length_scale, cart_mass_scale; default: none)")
     p.add_argument("--backend", choices=("rollout", "step"), default="rollout",
-                   help="batched mujoco.rollout or a plain mj_step loop; bit-identical results "
+                   help="batched MuJoCo (mujoco.batch) or a plain mj_step loop; bit-identical results "
                         "(default rollout)")
     p.add_argument("--nthread", type=_nonneg_int, default=None,
-                   help="rollout threads (default: the CPU cores available, at most 8)")
+                   help="physics threads (default: the CPU cores available, at most 8)")
     p.add_argument("--record", metavar="FILE.rrd", default=None,
                    help="write a Rerun recording of every episode to FILE.rrd (default: none)")
     p.add_argument("--spawn", action="store_true",
@@ -222,7 +222,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also record the worst/median/best/first-failing episode of each "
                         "configuration into DIR (default: none)")
     p.add_argument("--nthread", type=_nonneg_int, default=None,
-                   help="rollout threads (default: the CPU cores available, at most 8)")
+                   help="physics threads (default: the CPU cores available, at most 8)")
     p.add_argument("--executor", choices=("local", "ray"), default="local",
                    help="where work units run: this process (default) or Ray tasks (needs the "
                         "extra: pip install 'pendulum-lqg[ray]'); results are byte-identical")
@@ -242,7 +242,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="report folder (default: <RESULTS>/report for one folder argument, else "
                         "report/)")
 
-    p = sub.add_parser("perf", help="throughput: closed loop vs bare mujoco.rollout, memory",
+    p = sub.add_parser("perf", help="throughput: closed loop vs bare MuJoCo physics, memory",
                        description="Time the batched noisy DLQR + Kalman loop against MuJoCo's "
                                    "own open-loop rollout of the same batch, alternating, and "
                                    "optionally the peak memory of long benches.")
@@ -251,7 +251,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=_number, default=2.0,
                    help="seconds simulated per episode (default 2)")
     p.add_argument("--nthread", type=_nonneg_int, default=None,
-                   help="rollout threads (default: the CPU cores available, at most 8)")
+                   help="physics threads (default: the CPU cores available, at most 8)")
     p.add_argument("--repeats", type=_positive_int, default=5,
                    help="raw / closed-loop pairs, alternating; medians are compared (default 5)")
     p.add_argument("--memory", action="store_true",

@@ -532,8 +532,8 @@ class CartPoleLQGVectorEnv(VectorEnv):
     """``num_envs`` :class:`CartPoleLQGEnv` episodes stepped together on one batched sim core.
 
     The vector entry point of ``pendulum_lqg/CartPoleLQG-v0``
-    (``gymnasium.make_vec(id, num_envs=N)``): one ``mujoco.rollout`` call per step for the whole
-    batch. Each sub-env owns its generator, seeded as :class:`~gymnasium.vector.SyncVectorEnv`
+    (``gymnasium.make_vec(id, num_envs=N)``): one batched MuJoCo call (``mujoco.batch``) per step
+    for the whole batch. Each sub-env owns its generator, seeded as :class:`~gymnasium.vector.SyncVectorEnv`
     seeds its sub-envs (``reset(seed=s)`` → ``s, s+1, …``; or a list of seeds; ``None`` → fresh
     entropy), so sub-env ``i`` gives exactly the episodes of a single env reset with the same seed
     — after an autoreset too (the generator continues, as a single env's ``reset()`` without a seed).
@@ -563,7 +563,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
         max_episode_steps=M)`` passes it); the env's own ``duration`` also truncates, whichever
         comes first (``TimeLimit``'s rule: a sub-env that fails on its last step is both
         terminated and truncated)
-    nthread : rollout threads (default: the CPU cores, at most 8); results do not depend on it
+    nthread : physics threads (default: the CPU cores, at most 8); results do not depend on it
     the other keywords : as :class:`CartPoleLQGEnv`
     """
 
@@ -586,7 +586,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
         width, height = _image_size(self.plant, width, height)
         self._frames = _Frames(self.plant, width, height)
         self.dt, self.frame_skip = self._sim.dt, self._sim.k
-        #: rollout threads of the batched core
+        #: physics threads of the batched core
         self.nthread = self._sim.nthread
         limit = self._sim.n_periods
         if max_episode_steps is not None:

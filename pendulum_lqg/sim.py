@@ -8,9 +8,10 @@ One control period ``n`` (``T = k·h``) for each running episode:
 1. draw this period's unit normals from the episode's own generator (:class:`~.noise.NoiseStream`);
 2. measure ``y[n] = [p, θ] + v[n]`` (:meth:`Simulator.measure`);
 3. the policy returns a force; it is saturated to the actuator ``ctrlrange``;
-4. ``k`` physics steps with the force held (``mujoco.rollout`` for a batch, or a plain ``mj_step``
-   loop — both paths give bit-identical states); force noise, if chosen, enters through
-   ``qfrc_applied`` at every physics step;
+4. ``k`` physics steps with the force held (MuJoCo 4's ``mujoco.batch.Batch`` for a batch, one
+   simulation per row, see :class:`BatchPhysics`; or a plain ``mj_step`` loop — both paths give
+   bit-identical states); force noise, if chosen, enters through ``qfrc_applied`` at every
+   physics step;
 5. state noise, if chosen, is added to the state at the end of the period: ``x ← x + δx``;
 6. failure detection at every physics step and metrics streamed into per-episode accumulators
    (:class:`~pendulum_lqg.metrics.MetricsAccumulator`); trajectories are kept only on request.
@@ -18,7 +19,7 @@ One control period ``n`` (``T = k·h``) for each running episode:
 Realistic sensing and actuation (``Scenario`` fields, all off by default and then bit-identical to
 the plain loop): a measurement delay line and random sample losses (nan rows) in step 2, an
 actuator delay line and a first-order force lag (a force per physics step) in steps 3–4, and
-per-episode randomised models (``mujoco.rollout`` takes one model per row). Delay lines are ring
+per-episode randomised models (the batch runs one model per row). Delay lines are ring
 buffers of shape (n, d, ·) indexed by each row's own period, emptied when a row (re)starts. The
 metrics' ``u`` (RMS, max, saturation) is the command reaching the actuator (after the delay); J
 integrates the force actually applied (after the lag).
@@ -65,7 +66,7 @@ _NOT_FAILED = np.zeros(1, dtype=bool)
 _NOT_FAILED.flags.writeable = False
 _NO_REASON = np.zeros(1, dtype=np.int8)
 _NO_REASON.flags.writeable = False
-#: MuJoCo's warnings for an unstable state (it then resets the data; ``mujoco.rollout`` stops).
+#: MuJoCo's warnings for an unstable state (it then resets the data; the batch's rollout stops).
 _INSTABILITY_WARNINGS = tuple(int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS,
                                                mujoco.mjtWarning.mjWARN_BADQVEL,
                                                mujoco.mjtWarning.mjWARN_BADQACC))
@@ -256,9 +257,9 @@ class Simulator:
     ----------
     plant : the simulated plant
     scenario : timing, noise, initial state, failure rule and cost
-    backend : ``"rollout"`` (``mujoco.rollout`` over the batch, several threads) or ``"step"``
+    backend : ``"rollout"`` (a ``mujoco.batch`` rollout over the batch, several threads) or ``"step"``
         (plain ``mj_step`` loop, the single-episode path)
-    nthread : rollout threads (default: the number of CPU cores, at most 8)
+    nthread : physics threads (default: the number of CPU cores, at most 8)
     streamed_metrics : keep the per-episode metric accumulators (:attr:`metrics`). ``False``
         computes only each period's cost (the same :func:`~pendulum_lqg.metrics.period_integrals`)
         — what the gymnasium environments need, at a lower cost per step.
@@ -428,7 +429,7 @@ class Simulator:
 
     @property
     def nthread(self) -> int:
-        """Rollout threads (0 or 1: the calling thread)."""
+        """Physics threads (0 or 1: the calling thread)."""
         return self._nthread
 
     def measure(self, rows: np.ndarray | None = None) -> np.ndarray:
@@ -693,7 +694,7 @@ class Simulator:
                 out[r, j, :2] = d.qpos[qi]
                 out[r, j, 2:] = d.qvel[vi]
                 if any(d.warning[w].number for w in _INSTABILITY_WARNINGS):
-                    # MuJoCo reset the data after an instability: as mujoco.rollout does, stop
+                    # MuJoCo reset the data after an instability: as the batch's rollout does, stop
                     # and hold the state reached for the rest of the period
                     out[r, j + 1:] = out[r, j]
                     reset_flag[r] = True
@@ -1132,9 +1133,9 @@ MIN_SHARD_ROWS = 32
 def shard_count(n: int, nthread: int, backend: str, policy: object) -> int:
     """How many independent shards :func:`run_episodes` splits ``n`` episodes into.
 
-    A batch on ``nthread ≥ 2`` rollout threads runs as ``nthread`` shards of about ``n / nthread``
+    A batch on ``nthread ≥ 2`` physics threads runs as ``nthread`` shards of about ``n / nthread``
     episodes, each a :class:`Simulator` stepping its physics in its own Python thread
-    (``mujoco.rollout`` and numpy's larger operations release the GIL): the policy and metrics work
+    (MuJoCo's batch and numpy's larger operations release the GIL): the policy and metrics work
     of one shard overlaps the physics of the others, where a single batch would leave the rollout
     threads idle during it. Results do not change (episodes are independent and each draws from its
     own generator). Only policies that declare ``independent_rows = True`` (every built-in; a plugin
