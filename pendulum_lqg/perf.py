@@ -128,7 +128,7 @@ def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None
     report = [
         f"pendulum-lqg perf — {episodes} episodes × {duration:g} s, h = {plant.timestep:g} s, "
         f"{k} steps per control period, {nthread} threads, {repeats} alternating pairs",
-        f"bare physics (faster of the two below): {raw_med:>12,.0f} physics steps/s (median)",
+        f"bare physics (per pair, the faster):    {raw_med:>12,.0f} physics steps/s (median)",
         f"  one mujoco.rollout call, no outputs:  {statistics.median(raw_rollout):>12,.0f}",
         f"  one mujoco.batch Batch.step call:     {statistics.median(raw_batch):>12,.0f}",
         f"closed loop (DLQR + Kalman, noisy):     {closed_med:>12,.0f} physics steps/s (median)",
