@@ -782,7 +782,8 @@ class BatchPhysics:
     k : physics steps per period
     """
 
-    def __init__(self, plant: Plant, capacity: int, nthread: int, k: int) -> None:
+    def __init__(self, plant: Plant, capacity: int, nthread: int, k: int, *,
+                 aligned: bool | None = None) -> None:
         m = plant.model
         st = mujoco.mjtState
         self.model, self.capacity, self.k = m, capacity, k
@@ -811,8 +812,12 @@ class BatchPhysics:
         #: is recorded as [time, p, θ, ṗ, θ̇], five numbers like a row of the period buffer
         #: [p, θ, ṗ, θ̇, u] one place later, so the k records land in rows 1 … k of the buffer as
         #: one copy of 5k consecutive numbers per row (see :meth:`advance`)
-        self.aligned = (m.nq == 2 and m.nv == 2 and list(plant.qpos_index) == [0, 1]
-                        and list(plant.qvel_index) == [0, 1])
+        #: (``aligned=False`` forces the general copy, for models with other layouts; tests)
+        can_align = (m.nq == 2 and m.nv == 2 and list(plant.qpos_index) == [0, 1]
+                     and list(plant.qvel_index) == [0, 1])
+        if aligned and not can_align:
+            raise ConfigError("aligned: this model's qpos/qvel are not [p, θ], [ṗ, θ̇]")
+        self.aligned = can_align if aligned is None else aligned
         if self.aligned:
             self.record_spec = int(st.mjSTATE_TIME | st.mjSTATE_QPOS | st.mjSTATE_QVEL)
             self.rec = np.empty((capacity, k, 5))

@@ -343,3 +343,27 @@ def test_step_one_equals_step_on_one_row(plant):
     many.reset([np.random.default_rng(1), np.random.default_rng(2)])
     with pytest.raises(PendulumLQGError, match="step_one: needs a one-row simulator"):
         many.step_one(0.0)
+
+
+def test_batch_physics_aligned_and_general_record_copies_agree(plant):
+    """The shipped model's records go into the period buffer as one run per row (``aligned``);
+    models with other qpos/qvel layouts take the general strided copy: both fill rows 1 … k with
+    the same states and report the same MuJoCo resets (an instability in row 2)."""
+    from pendulum_lqg.sim import BatchPhysics
+
+    k, n = 10, 5
+    rng = np.random.default_rng(3)
+    x = rng.normal(scale=0.2, size=(n, 4))
+    x[2, 3] = 1e300                                  # MuJoCo resets this row
+    u = rng.uniform(-10, 10, n)
+    bufs, resets = [], []
+    for aligned in (True, False):
+        phys = BatchPhysics(plant, n, 1, k, aligned=aligned)
+        assert phys.aligned is aligned
+        buf = np.zeros((n, k + 2, 5))
+        resets.append(phys.advance(n, x, u, None, buf, np.zeros((n, k, 1))))
+        bufs.append(buf)
+    assert np.array_equal(bufs[0][:, 1:k + 1, :4], bufs[1][:, 1:k + 1, :4])
+    assert np.array_equal(resets[0], resets[1]) and resets[0].tolist() == [False, False, True,
+                                                                              False, False]
+    assert np.all(np.abs(bufs[0][:, 1:k + 1, :4] - x[:, None, :])[[0, 1, 3, 4]] > 0)   # it moved
