@@ -31,8 +31,7 @@ import numpy as np
 
 import pendulum_lqg
 from pendulum_lqg.agent import LQGAgent
-from pendulum_lqg.perf import raw_batch_rate, raw_rollout_rate
-from pendulum_lqg.sim import rollout_chunk
+from pendulum_lqg.perf import raw_batch_rate, raw_rollout_rate, rollout_chunk
 
 
 class Runner:

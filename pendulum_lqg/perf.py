@@ -33,6 +33,27 @@ from pendulum_lqg.plant import load_plant
 from pendulum_lqg.policy import DesignSpec, design_policy
 from pendulum_lqg.sim import Scenario, run_episodes, shard_count, thread_count
 
+#: Fewest physics steps a rollout chunk (one thread-pool task) should hold: smaller chunks cost
+#: more in hand-offs than they win in load balance (measured with 64 and 1024 rows).
+MIN_CHUNK_STEPS = 300
+
+
+def rollout_chunk(n: int, nthread: int, nstep: int) -> int | None:
+    """``chunk_size`` for the ``mujoco.rollout`` baselines (the core steps ``mujoco.batch``,
+    which schedules its own threads): a ``Rollout`` of ``n`` rows of ``nstep`` physics steps on
+    ``nthread`` threads: about ten chunks per thread (``mujoco.rollout``'s default, for load balance), but no
+    chunk under :data:`MIN_CHUNK_STEPS` steps, and a whole multiple of the thread count so no
+    thread is left with an extra chunk while the others wait (64 rows on 2 threads: 2 × 32, not
+    30 + 30 + 4). A batch too small to split runs as one chunk."""
+    if nthread <= 1:
+        return None
+    most = (n * nstep) // MIN_CHUNK_STEPS
+    if most < nthread:
+        return max(n, 1)
+    chunks = min(10 * nthread, most)
+    chunks -= chunks % nthread
+    return -(-n // chunks)
+
 
 def raw_rollout_rate(plant: object, episodes: int, nstep: int, nthread: int, *,
                      calls: int = 1, chunk_size: int | None = None, outputs: bool = False,

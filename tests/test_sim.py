@@ -17,7 +17,6 @@ from pendulum_lqg.sim import (
     Scenario,
     Simulator,
     episode_seed,
-    rollout_chunk,
     run_episodes,
     shard_count,
 )
@@ -144,6 +143,8 @@ def test_backends_agree_on_failures_from_extreme_initial_states(plant):
 
 
 def test_rollout_chunks_are_a_multiple_of_the_threads():
+    from pendulum_lqg.perf import rollout_chunk
+
     assert rollout_chunk(64, 2, 10) == 32                 # not 30 + 30 + 4
     assert rollout_chunk(1024, 2, 10) == 52               # 20 chunks, ten per thread
     assert rollout_chunk(8, 2, 10) == 8                   # too small to split
