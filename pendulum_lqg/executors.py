@@ -88,6 +88,8 @@ class RayExecutor:
         self.max_retries = max_retries
         self.nthread = nthread
         self._connected_here = not ray.is_initialized()   # else the caller owns the connection
+        #: a Ray instance started for this run on this machine (close() stops it)
+        self._local_instance = self._connected_here and address is None
         try:
             if self._connected_here:
                 ray.init(address=address, num_cpus=num_cpus if address is None else None,
@@ -119,8 +121,14 @@ class RayExecutor:
                     continue
                 yield unit, rows, None
         finally:
-            for ref in in_flight:               # interrupted: stop what is still running
-                ray.cancel(ref, force=True)
+            # interrupted: stop what is still running. A local instance started for this run is
+            # stopped whole by close(), workers included; cancelling there too only risks Ray's
+            # race between a cancel and a task's reply arriving, which aborts the driver
+            # ("it != submissible_tasks_.end()", ray-project/ray#54798) and turns a clean
+            # Ctrl-C into a crash. On a cluster the tasks must be cancelled, or they run on.
+            if not self._local_instance:
+                for ref in in_flight:
+                    ray.cancel(ref, force=True)
 
     def close(self) -> None:
         """Disconnect (and stop the local instance started for the run), unless the caller had
