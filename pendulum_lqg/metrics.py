@@ -71,7 +71,13 @@ def period_integrals(z: np.ndarray, fail_step: np.ndarray | None, *, h: float,
         mask = np.arange(k)[None, :] <= fail_step[:, None]                 # (n, k)
         t_alive = mask.sum(axis=1) * h
         z = np.where(mask[:, :, None], z, 0.0)
-    return z, t_alive, _einsum("nki,nki,i->n", z, z, weights)
+    return z, t_alive, period_cost(z, weights)
+
+
+def period_cost(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``Σ_j Σ_i weights_i · z[j, i]²`` per row of a period's (n, k, 5) ``z`` (nothing masked):
+    the cost sum of :func:`period_integrals`, one ``einsum``."""
+    return _einsum("nki,nki,i->n", z, z, weights)
 
 
 class MetricsAccumulator:
