@@ -111,7 +111,8 @@ def test_rrd_verify_rejects_a_truncated_file(kalman, tmp_path):
 @pytest.mark.parametrize(("display", "note"), [
     (None, ("viewer: no display (DISPLAY and WAYLAND_DISPLAY are unset), so no viewer was started",)),
     # a display that is not there: the spawned viewer either never listens, or (on a loaded
-    # machine) listens for a moment and dies before it takes the recording — both one line
+    # machine) listens for a moment and dies before it takes the recording — both one line —
+    # or, rarely, takes the recording before it finds no window to open (seen once in CI)
     (":99", ("viewer: no Rerun viewer listened on port 9876 within 5 s",
              "viewer: the Rerun viewer did not take the recording within 10 s")),
 ])
@@ -130,8 +131,13 @@ def test_spawn_without_a_reachable_viewer_never_hangs_and_writes_the_file(tmp_pa
                          capture_output=True, text=True, timeout=90)
     assert out.returncode == 0, out.stderr
     ours = [line for line in out.stderr.splitlines() if line.startswith(("viewer:", "recording:"))]
-    assert ours[0].startswith(note) and ours[0].endswith(f"open the file with: rerun {path}")
-    assert ours[1].startswith(f"recording: {path} (1 episode(s), ")
+    recorded = [line for line in ours if line.startswith("recording:")]
+    notes = [line for line in ours if line.startswith("viewer:")]
+    assert len(recorded) == 1 and recorded[0].startswith(f"recording: {path} (1 episode(s), ")
+    viewer_took_it = display is not None and not notes and "streamed to the viewer" in recorded[0]
+    if not viewer_took_it:
+        assert ours == [notes[0], recorded[0]]
+        assert notes[0].startswith(note) and notes[0].endswith(f"open the file with: rerun {path}")
     assert "success: 1/1" in out.stdout
     check = verify_recording(path)
     assert check.ok, check.output
