@@ -688,7 +688,8 @@ class CartPoleLQGVectorEnv(VectorEnv):
             if not (terminated.any() or truncated.any()):           # ... and keeps running
                 reward = step_reward(res.cost, terminated, self._scale_dt)
                 self._obs = self._observe(self._all)
-                infos = self._infos_all(res.cost, res.reason, self._actions.applied(u))
+                infos = self._infos(self._all, res.cost, res.reason,
+                                    self._actions.applied(u))
                 return self._obs.copy(), reward, terminated, truncated, infos
             return self._step_end(u, res, np.zeros(0, dtype=np.int64), truncated)
         waiting = np.nonzero(self._waiting)[0]
@@ -742,41 +743,26 @@ class CartPoleLQGVectorEnv(VectorEnv):
             self._waiting[ended] = True
         return self._obs.copy(), reward, terminated, truncated, infos
 
-    def _infos_all(self, cost: np.ndarray, reason: np.ndarray, force: np.ndarray,
-                   ) -> dict[str, Any]:
-        """:meth:`_infos` of every sub-env (the common step), without the masked writes."""
-        sim = self._sim
-        state = sim.x.copy()
-        values = {"cost": cost.copy(), "running_cost": self._running_cost.copy(), "state": state,
-                  "y_true": state[:, :2].copy(), "failure_reason": _REASON_NAMES[reason],
-                  "time": sim.t.copy(), "force": force}
-        mask = np.ones(self.num_envs, dtype=bool)
-        out: dict[str, Any] = {}
-        for key, arr in values.items():
-            out[key] = arr
-            out["_" + key] = mask.copy()
-        return out
-
     def _infos(self, rows: np.ndarray, cost: np.ndarray, reason: np.ndarray,
                force: np.ndarray) -> dict[str, Any]:
         """Vector infos (arrays with ``_key`` masks) of ``rows``, as ``SyncVectorEnv`` builds."""
         n, sim = self.num_envs, self._sim
-        full = rows.size == n
-        mask = np.ones(n, dtype=bool)
-        if not full:
-            mask[:] = False
-            mask[rows] = True
-        state = np.zeros((n, 4))
-        state[rows] = sim.x[rows]
+        full = rows.size == n                   # the common step: whole arrays, no masked writes
+
+        def spread(values: np.ndarray, fill: object = 0.0, dtype: Any = float) -> np.ndarray:
+            if full:
+                return np.array(values, dtype=dtype)           # a copy
+            out = np.full((n, *np.shape(values)[1:]), fill, dtype=dtype)
+            out[rows] = values
+            return out
+
+        mask = np.ones(n, dtype=bool) if full else np.isin(np.arange(n), rows)
+        state = spread(sim.x[rows])
         values: dict[str, np.ndarray] = {
-            "cost": np.zeros(n), "running_cost": np.zeros(n), "state": state,
-            "y_true": state[:, :2].copy(), "failure_reason": np.full(n, None, dtype=object),
-            "time": np.zeros(n), "force": np.zeros(n)}
-        values["cost"][rows] = cost
-        values["running_cost"][rows] = self._running_cost[rows]
-        values["time"][rows] = sim.t[rows]
-        values["failure_reason"][rows] = _REASON_NAMES[reason]
-        values["force"][rows] = force
+            "cost": spread(cost), "running_cost": spread(self._running_cost[rows]),
+            "state": state, "y_true": state[:, :2].copy(),
+            "failure_reason": spread(_REASON_NAMES[reason], None, object),
+            "time": spread(sim.t[rows]), "force": spread(force)}
         out: dict[str, Any] = {}
         for key, arr in values.items():
             out[key] = arr
