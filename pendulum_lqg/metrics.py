@@ -80,6 +80,28 @@ def period_cost(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
     return _einsum("nki,nki,i->n", z, z, weights)
 
 
+def _adder(ids: np.ndarray | slice) -> Any:
+    """``add(arr, v)``: ``arr[ids] += v``, in place through a view when ``ids`` is a slice (the
+    augmented assignment would also write the view back onto itself)."""
+    if isinstance(ids, slice):
+        def add(arr: np.ndarray, v: Any) -> None:
+            view = arr[ids]
+            np.add(view, v, out=view)
+    else:
+        def add(arr: np.ndarray, v: Any) -> None:
+            arr[ids] += v
+    return add
+
+
+def _update(ids: np.ndarray | slice, arr: np.ndarray, op: Any, v: np.ndarray) -> None:
+    """``arr[ids] = op(arr[ids], v)``, in place when ``ids`` is a slice."""
+    view = arr[ids]
+    if isinstance(ids, slice):
+        op(view, v, out=view)
+    else:
+        arr[ids] = op(view, v)
+
+
 class MetricsAccumulator:
     """Running sums per episode id; :meth:`rows` turns them into episode records.
 
@@ -116,6 +138,7 @@ class MetricsAccumulator:
         self.h, self.k = h, k
         self.weights, self.u_max = weights, u_max
         self.band = settle_band
+        self._steps = np.arange(1, k + 1)[:, None]      # (k, 1): 1 … k, the settling-time index
         self._alloc(max(n, 1))
 
     def _alloc(self, n: int) -> None:
@@ -156,38 +179,43 @@ class MetricsAccumulator:
         the applied force; ``x_fail`` (n, 4) the state at the end of each row's failing step —
         the sample that crossed the limit, counted in the ``max_abs_*`` metrics); returns the
         period's cost per row."""
-        h, k = self.h, self.k
+        h = self.h
         x_start = z[:, 0, :4]
         z, t_alive, cost = period_integrals(z, fail_step, h=h, weights=self.weights)
-        xs = z[:, :, :4]
-        self.cost[ids] += cost
-        self.alive[ids] += t_alive
-        theta, p = xs[:, :, 1], xs[:, :, 0]
-        self.theta2[ids] += h * np.einsum("nk,nk->n", theta, theta)
-        self.p2[ids] += h * np.einsum("nk,nk->n", p, p)
-        self.u2[ids] += u * u * t_alive
-        self.sat[ids] += (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive
-        abs_theta = np.abs(theta)
-        # a row's max can only grow if this period's largest value (over the batch: one flat
-        # reduction) exceeds the smallest running max — rarely, once the start has passed
-        for running, a in ((self.max_theta, abs_theta), (self.max_p, np.abs(p))):
-            cur = running[ids]
-            if not a.max(initial=0.0) <= cur.min(initial=np.inf):     # nan: update
-                running[ids] = np.maximum(cur, a.max(axis=1))
-        self.max_u[ids] = np.maximum(self.max_u[ids], np.abs(u))
-        exceed = abs_theta > self.band
-        has = exceed.any(axis=1)
-        if has.any():       # the end of the row's last physics step outside the band
-            settled = t + (k - np.argmax(exceed[:, ::-1], axis=1)) * h
-            if has.all():
-                self.settle[ids] = settled
+        add = _adder(ids)
+        add(self.cost, cost)
+        add(self.alive, t_alive)
+        theta, p = z[:, :, 1], z[:, :, 0]
+        add(self.theta2, h * _einsum("nk,nk->n", theta, theta))
+        add(self.p2, h * _einsum("nk,nk->n", p, p))
+        add(self.u2, u * u * t_alive)
+        add(self.sat, (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive)
+        # |p| and |θ| as (2, k, n), each component one contiguous block: the row maxima are then
+        # one reduction over the middle axis with long inner loops (on the (n, k) views numpy
+        # loops over k = 10 numbers at a time); a max is exact, so its order changes nothing
+        a = np.abs(z[:, :, :2].transpose(2, 1, 0), order="C")
+        row_max = a.max(axis=1)                                  # (2, n): max |p|, max |θ|
+        _update(ids, self.max_p, np.maximum, row_max[0])
+        _update(ids, self.max_theta, np.maximum, row_max[1])
+        _update(ids, self.max_u, np.maximum, np.abs(u))
+        # settling: the end of each row's last physics step with |θ| above the band. The alive
+        # part of z holds no nan (a nan state ends its episode at the step that made it), so a
+        # row's largest |θ| is above the band exactly when one of its steps is.
+        has = row_max[1] > self.band
+        if has.any():
+            # 1 + the index of each row's last step above the band (0: none), as an integer
+            last = np.multiply(a[1] > self.band, self._steps).max(axis=0)
+            settled = t + last * h
+            if isinstance(ids, slice):
+                np.copyto(self.settle[ids], settled, where=has)
             else:
-                self.settle[self._index(ids)[has]] = settled[has]
+                self.settle[ids[has]] = settled[has]
         if x_hat is not None:
             err = x_hat - x_start
             with np.errstate(over="ignore", invalid="ignore"):     # a diverged row: inf is honest
-                self.est2[ids] += err * err
-            self.n_est[ids] += 1
+                np.multiply(err, err, out=err)
+                add(self.est2, err)
+            add(self.n_est, 1.0)
         if fail_step is not None:
             f = self._index(ids)[failed]
             if x_fail is not None:          # the crossing sample (nan of a diverged row ignored)

@@ -285,11 +285,10 @@ class Simulator:
         self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h)
         #: h·[diag(Q), R]: the cost of a period is Σ weights·z² over its physics steps, z = [x, u]
         self.weights = self.h * np.append(scenario.cost_Q, scenario.cost_R)
-        #: [track, theta_max, RUNAWAY, RUNAWAY, 2·u_max] for each of the k+1 rows after a
-        #: period's start: the failure check's fast path (a saturated force passes it; a nan
-        #: one does not)
-        self._limits_rows = np.tile(np.array([self.track, scenario.theta_max, RUNAWAY, RUNAWAY,
-                                              2.0 * self.u_max]), (self.k + 1, 1))
+        #: [track, theta_max, RUNAWAY, RUNAWAY, 2·u_max]: the failure check's fast path bounds
+        #: every row of a period buffer (a saturated force passes it; a nan one does not)
+        self._limits_row = np.array([self.track, scenario.theta_max, RUNAWAY, RUNAWAY,
+                                     2.0 * self.u_max])
         self._force_noise = scenario.noise.process == "force" and self.noise.enabled
         self._state_noise = scenario.noise.process == "state" and self.noise.enabled
         st = mujoco.mjtState
@@ -364,8 +363,13 @@ class Simulator:
         # one period of each row, z = [x, u]: at the start | after each of the k physics steps |
         # at the end (after state noise); u is held over steps 0 … k−1 and 0 after them
         self._period_buf = np.zeros((n, self.k + 2, 5))
-        self._scratch = np.empty((n, self.k + 1, 5))     # |z| of the failure check
-        self._inside = np.empty((n, self.k + 1, 5), dtype=bool)    # |z| < limit
+        # the failure check's fast path runs on the period buffer flattened (one contiguous run
+        # of numbers: a fraction of the cost of the same ufuncs on a 3-d view): the limits of
+        # every entry, |z| and |z| < limit
+        size = self._period_buf.size
+        self._limits_flat = np.tile(self._limits_row, size // 5)
+        self._scratch = np.empty(size)
+        self._inside = np.empty(size, dtype=bool)
         self._row0 = _RowViews(self, self.k)
 
     # ---- episodes ----------------------------------------------------------------------------
@@ -532,7 +536,7 @@ class Simulator:
         else:
             v.end[...] = v.last
         buf = v.buf
-        if not reset and _all_inside(np.abs(v.tail, out=v.scratch), self._limits_rows, v.inside):
+        if not reset and _all_inside(v.flat, v.limits, v.scratch, v.inside):
             return buf, _NOT_FAILED, _NO_REASON, None       # _within_limits on row 0's views
         return (buf, *self._detect_failure(buf, np.array([reset])))
 
@@ -707,12 +711,13 @@ class Simulator:
         return reset_flag
 
     def _within_limits(self, buf: np.ndarray) -> bool:
-        """The failure check's fast path, the common case: every ``|x_i| < limit_i`` over the
-        period's states (the end state too, a stricter test than its own), so the full checks of
-        :meth:`_detect_failure` would find no failure (a nan fails the comparison)."""
-        n = buf.shape[0]
-        return _all_inside(np.abs(buf[:, 1:], out=self._scratch[:n]), self._limits_rows,
-                           self._inside[:n])
+        """The failure check's fast path, the common case: every ``|z_i| < limit_i`` over the
+        whole period buffer (the start and end states too: a stricter test than the full one),
+        so the full checks of :meth:`_detect_failure` would find no failure (a nan fails the
+        comparison). ``buf`` is the C-contiguous ``_period_buf[:n]``."""
+        m = buf.size
+        return _all_inside(buf.reshape(-1), self._limits_flat[:m], self._scratch[:m],
+                           self._inside[:m])
 
     def _detect_failure(self, buf: np.ndarray, reset_flag: np.ndarray,
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -746,11 +751,12 @@ class Simulator:
         return failed, reason, None
 
 
-def _all_inside(absolute: np.ndarray, limits_rows: np.ndarray, inside: np.ndarray) -> bool:
-    """Every entry of a period's (n, k+1, 5) ``|z|`` strictly below its limit (``inside``: a
-    bool scratch of that shape). ``count_nonzero`` is a plain C count, a fraction of a ufunc
-    reduction's cost (``all``/``max``) on small arrays."""
-    np.less(absolute, limits_rows, out=inside)
+def _all_inside(z: np.ndarray, limits: np.ndarray, scratch: np.ndarray, inside: np.ndarray,
+                ) -> bool:
+    """Every entry of the 1-d ``z`` strictly below its limit in magnitude (``scratch``,
+    ``inside``: float and bool scratches of that shape). ``count_nonzero`` is a plain C count, a
+    fraction of a ufunc reduction's cost (``all``/``max``) on small arrays."""
+    np.less(np.abs(z, out=scratch), limits, out=inside)
     return bool(np.count_nonzero(inside) == inside.size)
 
 
@@ -759,8 +765,10 @@ class _RowViews:
 
     def __init__(self, sim: Simulator, k: int) -> None:
         self.buf = sim._period_buf[:1]
-        self.z, self.tail = self.buf[:, :k], self.buf[:, 1:]
-        self.scratch, self.inside = sim._scratch[:1], sim._inside[:1]
+        self.z = self.buf[:, :k]
+        size = self.buf.size             # the failure check's fast path on the flat row
+        self.flat, self.limits = self.buf.reshape(-1), sim._limits_flat[:size]
+        self.scratch, self.inside = sim._scratch[:size], sim._inside[:size]
         b = self.buf[0]
         self.start, self.u = b[0, :4], b[:k, 4]
         self.last, self.end = b[k, :4], b[k + 1, :4]
@@ -838,6 +846,7 @@ class BatchPhysics:
         self._ids1 = None if capacity == 1 else np.zeros(1, dtype=np.int32)
         self._records1 = [(None, self.record_spec, self.rec[:1])]
         self._rec1_flat = self.rec[:1].reshape(1, -1)
+        self._buf1: np.ndarray | None = None      # the period buffer the records go straight into
 
     def _rollout(self, ids: np.ndarray | None, control: np.ndarray | None, spec: int,
                  records: list[tuple[None, int, np.ndarray]]) -> None:
@@ -871,9 +880,26 @@ class BatchPhysics:
         state[self.dynamic] = self.state0_dynamic            # mj_resetData's values
         state[self.x_cols] = x
         state[self.ctrl_col] = u
-        self._rollout(self._ids1, None, self.control_spec, self._records1)
-        self._store(buf, self._rec1_flat, self.rec[:1])
+        if buf is self._buf1:            # aligned: the rollout records straight into the buffer
+            self._rollout(self._ids1, None, self.control_spec, self._direct1)
+        else:
+            self._rollout(self._ids1, None, self.control_spec, self._records1)
+            self._store(buf, self._rec1_flat, self.rec[:1])
+            self._bind_row(buf)
         return bool(state[0] < self.reset_before)
+
+    def _bind_row(self, buf: np.ndarray) -> None:
+        """Let later :meth:`advance_one` calls with this one-row buffer record into it directly.
+
+        With the aligned layout, :meth:`_store` copies the k records, one run of 5k numbers, to
+        the numbers 4 … 4+5k−1 of the row; that run of a C-contiguous buffer is itself a
+        C-contiguous (1, k, 5) array, which the rollout can fill instead (one copy fewer per
+        step of a single env)."""
+        if not (self.aligned and buf.shape[0] == 1 and buf.flags.c_contiguous):
+            return
+        self._direct1 = [(None, self.record_spec,
+                          buf.reshape(-1)[4:4 + 5 * self.k].reshape(1, self.k, 5))]
+        self._buf1 = buf
 
     def _store(self, buf: np.ndarray, rec_flat: np.ndarray, rec: np.ndarray) -> None:
         """The k records of each row into rows 1 … k, columns 0 … 3, of the period buffer
