@@ -458,17 +458,17 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         return obs, reward, failed, truncated, self._info(cost, reason, self._actions.applied(u))
 
     def _observe(self) -> np.ndarray:
-        y = self._sim.measure()   # always: it draws this period's process noise too
-        return y[0] if self.observation_mode == "measurement" else self._sim.x[0].copy()
+        y = self._sim.measure_one()   # always: it draws this period's process noise too
+        return y if self.observation_mode == "measurement" else self._sim.x[0].copy()
 
     def _noise_free_observation(self) -> np.ndarray:
         x = self._sim.x[0]
         return (x[:2] if self.observation_mode == "measurement" else x).copy()
 
     def _info(self, cost: float, reason: int, force: float) -> dict[str, Any]:
-        x = self._sim.x[0]
-        return {"cost": cost, "running_cost": self._running_cost, "state": x.copy(),
-                "y_true": x[:2].copy(), "failure_reason": FAIL_REASONS[reason],
+        state = self._sim.x[0].copy()
+        return {"cost": cost, "running_cost": self._running_cost, "state": state,
+                "y_true": state[:2], "failure_reason": FAIL_REASONS[reason],
                 "time": float(self._sim.t[0]), "force": force}
 
     @property

@@ -455,6 +455,14 @@ class Simulator:
         y = self.x[rows, :2] + v
         return y if self._plain_sensing else self._sense(y, rows)
 
+    def measure_one(self) -> np.ndarray:
+        """:meth:`measure` of a one-row simulator (the single gymnasium env): ``y`` (2,), the
+        same numbers as ``measure()[0]`` without the batch's (1, 2) arrays."""
+        if not self._plain_sensing:
+            return self.measure()[0]
+        self._w, v = self.noise.draw()
+        return self.x[0, :2] + v[0]
+
     def noise_free_measurement(self) -> np.ndarray:
         return self.x[:, :2].copy()
 
@@ -526,13 +534,13 @@ class Simulator:
         if physics is None:
             raise _closed_error()
         v = self._row0
-        x = self.x[0]
+        x = self.x                                        # (1, 4)
         forces = self.noise.forces(self._w)[:1] if self._force_noise else None
         reset = physics.advance_one(x, u, forces, v.buf, self._ctrl_buf)
         v.start[...] = x
         v.u.fill(u)
         if self._state_noise:
-            np.add(v.last, self._w[0], out=v.end)
+            np.add(v.last, self._w, out=v.end)
         else:
             v.end[...] = v.last
         buf = v.buf
@@ -560,7 +568,7 @@ class Simulator:
                      period_integrals(z, fail_step, h=self.h, weights=self.weights)[2][0])
         self.t[0] += self.dt            # in place, element-wise (one row, nobody else holds them):
         self.period[0] += 1             # step()'s values without a ufunc call or an allocation
-        self.x[0] = self._row0.end
+        self.x[...] = self._row0.end
         return cost, int(reason[0])
 
     def _finish_period(self, buf: np.ndarray, u: np.ndarray, x_hat: np.ndarray | None,
@@ -770,8 +778,9 @@ class _RowViews:
         self.flat, self.limits = self.buf.reshape(-1), sim._limits_flat[:size]
         self.scratch, self.inside = sim._scratch[:size], sim._inside[:size]
         b = self.buf[0]
-        self.start, self.u = b[0, :4], b[:k, 4]
-        self.last, self.end = b[k, :4], b[k + 1, :4]
+        self.u = b[:k, 4]
+        # (1, 4) like the one-row x and process noise they meet
+        self.start, self.last, self.end = b[0:1, :4], b[k:k + 1, :4], b[k + 1:k + 2, :4]
 
 
 class BatchPhysics:
@@ -872,10 +881,10 @@ class BatchPhysics:
 
     def advance_one(self, x: np.ndarray, u: float, forces: np.ndarray | None, buf: np.ndarray,
                     ctrl_buf: np.ndarray) -> bool:
-        """:meth:`advance` of row 0 alone, ``x`` (4,), ``u`` a float held over the period, ``buf``
-        (1, k+2, 5); returns whether MuJoCo reset the row."""
+        """:meth:`advance` of row 0 alone, ``x`` (1, 4), ``u`` a float held over the period,
+        ``buf`` (1, k+2, 5); returns whether MuJoCo reset the row."""
         if forces is not None:
-            return bool(self.advance(1, x[None], u, forces, buf, ctrl_buf)[0])
+            return bool(self.advance(1, x, u, forces, buf, ctrl_buf)[0])
         state = self._state1
         state[self.dynamic] = self.state0_dynamic            # mj_resetData's values
         state[self.x_cols] = x
