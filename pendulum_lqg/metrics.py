@@ -22,9 +22,10 @@ from typing import Any
 import numpy as np
 
 try:    # np.einsum without optimize= is exactly this call, minus its Python wrapper (0.7 µs)
-    from numpy._core._multiarray_umath import c_einsum as _einsum
+    from numpy._core._multiarray_umath import c_einsum as einsum
 except ImportError:  # pragma: no cover - other numpy layouts
-    _einsum = np.einsum
+    einsum = np.einsum
+_einsum = einsum
 
 FAIL_NONE, FAIL_POLE, FAIL_TRACK, FAIL_DIVERGED = 0, 1, 2, 3
 FAIL_REASONS: dict[int, str] = {FAIL_NONE: "", FAIL_POLE: "pole_fell", FAIL_TRACK: "track_limit",

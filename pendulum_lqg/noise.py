@@ -114,7 +114,9 @@ class NoiseStream:
     ``2·k`` for force noise redrawn every physics step) followed by 2 measurement normals. A block
     of :data:`CHUNK_PERIODS` periods is drawn at once and scaled to physical units on the spot, so
     a period's draw is a view: the state jump ``δx`` (or the ``k`` generalised forces) and the
-    measurement noise ``v``.
+    measurement noise ``v``. The block is stored period-major, ``(CHUNK_PERIODS, n, width)``: a
+    period's noise of the whole batch is one contiguous slab (row-major, each episode's row lay
+    ``CHUNK_PERIODS·width`` numbers from the next, and every draw gathered one cache line per row).
 
     While every row is at the same period (a batch run, or a single env) the stream keeps one
     cursor for all rows; per-row draws (vector envs, whose rows restart at different periods) switch
@@ -138,7 +140,8 @@ class NoiseStream:
         self._scale = np.concatenate([np.tile(self.proc_std, self.n_proc // self.proc_std.size),
                                       self.meas_std])
         self._gens: list[np.random.Generator] = []
-        self._block = np.zeros((0, CHUNK_PERIODS, self.width))
+        self._block = np.zeros((CHUNK_PERIODS, 0, self.width))
+        self._unit = np.empty((CHUNK_PERIODS, self.width))   # one episode's normals, as drawn
         self._pos = np.zeros(0, dtype=np.int64)
         self._cursor: int | None = CHUNK_PERIODS     # the common position, or None (per row)
 
@@ -151,7 +154,7 @@ class NoiseStream:
         if rows is None:
             self._gens = list(generators)
             n = len(generators)
-            self._block = np.zeros((n, CHUNK_PERIODS, self.width))
+            self._block = np.zeros((CHUNK_PERIODS, n, self.width))
             self._pos = np.full(n, CHUNK_PERIODS, dtype=np.int64)
             self._cursor = CHUNK_PERIODS
         else:
@@ -167,9 +170,8 @@ class NoiseStream:
             self._cursor = None
 
     def _refill(self, r: int) -> None:
-        block = self._block[r]
-        self._gens[r].standard_normal(out=block)
-        block *= self._scale
+        self._gens[r].standard_normal(out=self._unit)      # the episode's next CHUNK periods
+        np.multiply(self._unit, self._scale, out=self._block[:, r])
 
     def draw(self, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The next period's noise of each row (default: every row), in physical units.
@@ -188,7 +190,7 @@ class NoiseStream:
                     self._refill(r)
                 c = 0
             self._cursor = c + 1
-            z = self._block[:, c]
+            z = self._block[c]
             return z[:, : self.n_proc], z[:, self.n_proc:]
         self._per_row()
         rows = np.arange(self.n) if rows is None else np.asarray(rows)
@@ -197,7 +199,7 @@ class NoiseStream:
             self._pos[r] = 0
         pos = self._pos[rows]
         self._pos[rows] += 1
-        z = self._block[rows, pos]
+        z = self._block[pos, rows]
         return z[:, : self.n_proc], z[:, self.n_proc:]
 
     def select(self, rows: np.ndarray) -> None:
@@ -209,12 +211,12 @@ class NoiseStream:
         rows = np.asarray(rows)
         self._gens = [self._gens[r] for r in rows]
         if rows.size > 1 and np.any(np.diff(rows) <= 0):
-            self._block = self._block[rows]          # not increasing: plain copy
+            self._block = self._block[:, rows]       # not increasing: plain copy
         else:
             for i, r in enumerate(rows.tolist()):
                 if i != r:
-                    self._block[i] = self._block[r]
-            self._block = self._block[: rows.size]
+                    self._block[:, i] = self._block[:, r]
+            self._block = self._block[:, : rows.size]
         self._pos = self._pos[rows]
 
     def forces(self, w: np.ndarray) -> np.ndarray:

@@ -166,7 +166,7 @@ class Policy:
     def act(self, y: np.ndarray) -> np.ndarray:
         """One control period: measurement (n, 2) (or state (n, 4)) → force (n,) in newtons."""
         x_hat = self.estimator.estimate(y)
-        u = np.clip(-mv(self.K, x_hat), -self.u_max, self.u_max)
+        u = np.minimum(np.maximum(-mv(self.K, x_hat), -self.u_max), self.u_max)   # np.clip's values
         self.estimator.update(u)
         return u[:, 0]
 
