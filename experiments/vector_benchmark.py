@@ -10,6 +10,7 @@ the same batch, one call per env step (N simulations × k physics steps, the nat
 no outputs requested, no Python around them — a vector env must return to Python once per control
 period): ``mujoco.rollout`` calls (with the chunking a rollout-based env would use) and
 ``mujoco.batch`` ``Batch.step`` calls with the force written before each. The faster of the two
+(the higher median; its runs are then used round by round, :func:`pendulum_lqg.perf.faster_series`)
 is the ceiling: ``native / bare physics`` is the share of it the native env reaches;
 ``physics / sync`` is the ceiling of the native/sync ratio on this machine (with ``c`` cores it
 grows about like ``c``: the sync env uses one). In each round the contenders take turns block by
@@ -31,7 +32,7 @@ import numpy as np
 
 import pendulum_lqg
 from pendulum_lqg.agent import LQGAgent
-from pendulum_lqg.perf import raw_batch_rate, raw_rollout_rate, rollout_chunk
+from pendulum_lqg.perf import faster_series, raw_batch_rate, raw_rollout_rate, rollout_chunk
 
 
 class Runner:
@@ -97,13 +98,14 @@ def main() -> None:
                 spent[name] += block * n * k / rate()
         for name, secs in spent.items():
             rates[name].append(n * block * args.blocks / secs)
-        rates["physics"].append(max(rates["rollout"][-1], rates["batch"][-1]))
-        log = {name: f"{v[-1]:,.0f}" for name, v in rates.items()}
+        log = {name: f"{v[-1]:,.0f}" for name, v in rates.items() if v}
         print(f"round {r + 1}/{args.repeats}: env steps/s {log}")
+    faster = faster_series({name: rates[name] for name in bare})
+    rates["physics"] = rates[faster]
     med = {name: float(np.median(v)) for name, v in rates.items()}
     for name, label in (("native", "native vector env"), ("sync", "SyncVectorEnv"),
                         ("rollout", "bare mujoco.rollout"), ("batch", "bare mujoco.batch"),
-                        ("physics", "bare physics (faster)")):
+                        ("physics", f"bare physics ({faster})")):
         print(f"{label:>28}: {med[name]:12,.0f} env steps/s ({med[name] * k:14,.0f} physics "
               f"steps/s; runs {min(rates[name]):,.0f}–{max(rates[name]):,.0f})")
     to_physics = [a / b for a, b in zip(rates["native"], rates["physics"], strict=True)]
