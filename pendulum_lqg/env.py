@@ -164,7 +164,10 @@ def _action_force(action: object, n: int) -> np.ndarray:
     if type(action) is np.ndarray and action.shape in ((n,), (n, 1)) \
             and action.dtype.kind == "f":                      # the common case, kept cheap
         u = action.astype(np.float64).reshape(n)
-        if (math.isfinite(u[0]) if n == 1 else bool(np.isfinite(u).all())):
+        # one sum is the fast check (a finite sum has finite terms; an overflowing one is
+        # checked term by term)
+        if (math.isfinite(u[0]) if n == 1 else
+                math.isfinite(u.sum()) or bool(np.isfinite(u).all())):
             return u
         raise PendulumLQGError(f"action: expected finite forces, got {u!r}")
     try:
@@ -747,22 +750,27 @@ class CartPoleLQGVectorEnv(VectorEnv):
                force: np.ndarray) -> dict[str, Any]:
         """Vector infos (arrays with ``_key`` masks) of ``rows``, as ``SyncVectorEnv`` builds."""
         n, sim = self.num_envs, self._sim
-        full = rows.size == n                   # the common step: whole arrays, no masked writes
+        values: dict[str, np.ndarray]
+        if rows.size == n:          # the common step: whole arrays, each the info's own copy
+            mask = np.ones(n, dtype=bool)
+            state = sim.x.copy()
+            values = {"cost": np.array(cost, dtype=float),
+                      "running_cost": self._running_cost.copy(), "state": state,
+                      "y_true": state[:, :2].copy(), "failure_reason": _REASON_NAMES[reason],
+                      "time": sim.t.copy(), "force": np.array(force, dtype=float)}
+        else:
+            def spread(values: np.ndarray, fill: object = 0.0, dtype: Any = float) -> np.ndarray:
+                out = np.full((n, *np.shape(values)[1:]), fill, dtype=dtype)
+                out[rows] = values
+                return out
 
-        def spread(values: np.ndarray, fill: object = 0.0, dtype: Any = float) -> np.ndarray:
-            if full:
-                return np.array(values, dtype=dtype)           # a copy
-            out = np.full((n, *np.shape(values)[1:]), fill, dtype=dtype)
-            out[rows] = values
-            return out
-
-        mask = np.ones(n, dtype=bool) if full else np.isin(np.arange(n), rows)
-        state = spread(sim.x[rows])
-        values: dict[str, np.ndarray] = {
-            "cost": spread(cost), "running_cost": spread(self._running_cost[rows]),
-            "state": state, "y_true": state[:, :2].copy(),
-            "failure_reason": spread(_REASON_NAMES[reason], None, object),
-            "time": spread(sim.t[rows]), "force": spread(force)}
+            mask = np.isin(np.arange(n), rows)
+            state = spread(sim.x[rows])
+            values = {
+                "cost": spread(cost), "running_cost": spread(self._running_cost[rows]),
+                "state": state, "y_true": state[:, :2].copy(),
+                "failure_reason": spread(_REASON_NAMES[reason], None, object),
+                "time": spread(sim.t[rows]), "force": spread(force)}
         out: dict[str, Any] = {}
         for key, arr in values.items():
             out[key] = arr
