@@ -243,9 +243,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "report/)")
 
     p = sub.add_parser("perf", help="throughput: closed loop vs bare MuJoCo physics, memory",
-                       description="Time the batched noisy DLQR + Kalman loop against MuJoCo's "
-                                   "own open-loop rollout of the same batch, alternating, and "
-                                   "optionally the peak memory of long benches.")
+                       description="Time the batched noisy DLQR + Kalman loop against bare "
+                                   "MuJoCo physics of the same batch (open-loop mujoco.rollout "
+                                   "and mujoco.batch calls, the faster as the baseline), "
+                                   "alternating, and optionally the peak memory of long benches.")
     p.add_argument("--episodes", type=_positive_int, default=1024,
                    help="episodes in the batch (default 1024)")
     p.add_argument("--duration", type=_number, default=2.0,

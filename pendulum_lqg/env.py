@@ -208,14 +208,19 @@ class _Actions:
                 raise PendulumLQGError(f"action: expected finite forces, got {action!r}")
         else:
             u = float(_action_force(action, 1)[0])
-        if self.normalize:
-            u = self.lo + (u + 1.0) * (0.5 * (self.hi - self.lo))
-        return u
+        return self._to_newtons(u)
 
     def forces(self, action: object, n: int) -> np.ndarray:
-        u = _action_force(action, n)
+        return self._to_newtons(_action_force(action, n))
+
+    @overload
+    def _to_newtons(self, u: float) -> float: ...
+    @overload
+    def _to_newtons(self, u: np.ndarray) -> np.ndarray: ...
+    def _to_newtons(self, u: np.ndarray | float) -> np.ndarray | float:
+        """Actions → requested forces: ``[−1, 1]`` onto ``[lo, hi]`` when normalized."""
         if self.normalize:
-            u = self.lo + (u + 1.0) * (0.5 * (self.hi - self.lo))
+            return self.lo + (u + 1.0) * (0.5 * (self.hi - self.lo))
         return u
 
     @overload

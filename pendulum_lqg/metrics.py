@@ -25,7 +25,6 @@ try:    # np.einsum without optimize= is exactly this call, minus its Python wra
     from numpy._core._multiarray_umath import c_einsum as einsum
 except ImportError:  # pragma: no cover - other numpy layouts
     einsum = np.einsum
-_einsum = einsum
 
 FAIL_NONE, FAIL_POLE, FAIL_TRACK, FAIL_DIVERGED = 0, 1, 2, 3
 FAIL_REASONS: dict[int, str] = {FAIL_NONE: "", FAIL_POLE: "pole_fell", FAIL_TRACK: "track_limit",
@@ -78,24 +77,12 @@ def period_integrals(z: np.ndarray, fail_step: np.ndarray | None, *, h: float,
 def period_cost(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """``Σ_j Σ_i weights_i · z[j, i]²`` per row of a period's (n, k, 5) ``z`` (nothing masked):
     the cost sum of :func:`period_integrals`, one ``einsum``."""
-    return _einsum("nki,nki,i->n", z, z, weights)
+    return einsum("nki,nki,i->n", z, z, weights)
 
 
-def _adder(ids: np.ndarray | slice) -> Any:
-    """``add(arr, v)``: ``arr[ids] += v``, in place through a view when ``ids`` is a slice (the
-    augmented assignment would also write the view back onto itself)."""
-    if isinstance(ids, slice):
-        def add(arr: np.ndarray, v: Any) -> None:
-            view = arr[ids]
-            np.add(view, v, out=view)
-    else:
-        def add(arr: np.ndarray, v: Any) -> None:
-            arr[ids] += v
-    return add
-
-
-def _update(ids: np.ndarray | slice, arr: np.ndarray, op: Any, v: np.ndarray) -> None:
-    """``arr[ids] = op(arr[ids], v)``, in place when ``ids`` is a slice."""
+def _update(ids: np.ndarray | slice, arr: np.ndarray, op: Any, v: Any) -> None:
+    """``arr[ids] = op(arr[ids], v)``, in place through a view when ``ids`` is a slice (``arr[ids]
+    += v`` would also write the view back onto itself)."""
     view = arr[ids]
     if isinstance(ids, slice):
         op(view, v, out=view)
@@ -183,14 +170,13 @@ class MetricsAccumulator:
         h = self.h
         x_start = z[:, 0, :4]
         z, t_alive, cost = period_integrals(z, fail_step, h=h, weights=self.weights)
-        add = _adder(ids)
-        add(self.cost, cost)
-        add(self.alive, t_alive)
+        _update(ids, self.cost, np.add, cost)
+        _update(ids, self.alive, np.add, t_alive)
         theta, p = z[:, :, 1], z[:, :, 0]
-        add(self.theta2, h * _einsum("nk,nk->n", theta, theta))
-        add(self.p2, h * _einsum("nk,nk->n", p, p))
-        add(self.u2, u * u * t_alive)
-        add(self.sat, (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive)
+        _update(ids, self.theta2, np.add, h * einsum("nk,nk->n", theta, theta))
+        _update(ids, self.p2, np.add, h * einsum("nk,nk->n", p, p))
+        _update(ids, self.u2, np.add, u * u * t_alive)
+        _update(ids, self.sat, np.add, (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive)
         # |p| and |θ| as (2, k, n), each component one contiguous block: the row maxima are then
         # one reduction over the middle axis with long inner loops (on the (n, k) views numpy
         # loops over k = 10 numbers at a time); a max is exact, so its order changes nothing
@@ -215,8 +201,8 @@ class MetricsAccumulator:
             err = x_hat - x_start
             with np.errstate(over="ignore", invalid="ignore"):     # a diverged row: inf is honest
                 np.multiply(err, err, out=err)
-                add(self.est2, err)
-            add(self.n_est, 1.0)
+                _update(ids, self.est2, np.add, err)
+            _update(ids, self.n_est, np.add, 1.0)
         if fail_step is not None:
             f = self._index(ids)[failed]
             if x_fail is not None:          # the crossing sample (nan of a diverged row ignored)

@@ -114,9 +114,10 @@ class NoiseStream:
     ``2·k`` for force noise redrawn every physics step) followed by 2 measurement normals. A block
     of :data:`CHUNK_PERIODS` periods is drawn at once and scaled to physical units on the spot, so
     a period's draw is a view: the state jump ``δx`` (or the ``k`` generalised forces) and the
-    measurement noise ``v``. The block is stored period-major, ``(CHUNK_PERIODS, n, width)``: a
-    period's noise of the whole batch is one contiguous slab (row-major, each episode's row lay
-    ``CHUNK_PERIODS·width`` numbers from the next, and every draw gathered one cache line per row).
+    measurement noise ``v``. The block is stored period-major, ``(CHUNK_PERIODS, n, width)``, so
+    a period's noise of the whole batch is one contiguous slab (stored episode-major, each
+    episode's numbers lay ``CHUNK_PERIODS·width`` apart and a draw touched one cache line per
+    episode).
 
     While every row is at the same period (a batch run, or a single env) the stream keeps one
     cursor for all rows; per-row draws (vector envs, whose rows restart at different periods) switch

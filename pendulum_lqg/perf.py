@@ -5,9 +5,9 @@
   requested** — one ``mujoco.rollout`` ``Rollout.rollout`` call, and one ``mujoco.batch``
   ``Batch.step`` call (MuJoCo 4's batch, which the simulation core steps) — the ceiling for any
   closed loop on this model. "The faster" is the call with the higher median over the repeats
-  (:func:`faster_series`); each pair's ratio uses that call's run of the pair. (Taking the
-  larger of the two runs within each pair instead would bias the baseline upwards by the
-  machine's noise, since the two calls are about equally fast.);
+  (:func:`faster_series`), and each pair's ratio uses that call's run of the pair: the larger
+  of the two runs within each pair would bias the baseline upwards by the machine's noise, the
+  two calls being about equally fast;
 * **with outputs** (for reference): the rollout call also writing the full physics state and
   sensor data of every step;
 * **closed loop**: :func:`~pendulum_lqg.sim.run_episodes` with DLQR + steady-state Kalman under the
