@@ -155,7 +155,10 @@ def step_reward(cost: np.ndarray | np.float64 | float, failed: np.ndarray | bool
     """
     r = np.exp(cost / -scale_dt)
     if isinstance(r, np.ndarray):
-        return np.where(failed, 0.0, np.maximum(r, REWARD_FLOOR))
+        np.maximum(r, REWARD_FLOOR, out=r)
+        if np.count_nonzero(failed):
+            r[failed] = 0.0
+        return r
     return 0.0 if failed else max(float(r), REWARD_FLOOR)
 
 
@@ -223,16 +226,11 @@ class _Actions:
             return self.lo + (u + 1.0) * (0.5 * (self.hi - self.lo))
         return u
 
-    @overload
-    def applied(self, u: float) -> float: ...
-    @overload
-    def applied(self, u: np.ndarray) -> np.ndarray: ...
-    def applied(self, u: np.ndarray | float) -> np.ndarray | float:
-        """The force the actuator applies (saturated), as the core applies it (a float for a
-        float: one row without numpy's per-call cost)."""
-        if isinstance(u, float):
-            return min(max(u, self.lo), self.hi)
-        return np.minimum(np.maximum(u, self.lo), self.hi)
+    def applied(self, u: float) -> float:
+        """The force the actuator applies to a single env's requested force ``u`` (saturated, as
+        the core saturates it; the vector env takes it from the core's
+        :attr:`~pendulum_lqg.sim.StepResult.requested`)."""
+        return min(max(u, self.lo), self.hi)
 
 
 class _Frames:
@@ -500,6 +498,9 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
 
 
 #: ``FAIL_REASONS`` indexed by code, for the vector infos.
+#: the vector env's info keys, each with its mask's key (Gymnasium's ``_key``), in order
+_INFO_KEYS = tuple((key, "_" + key) for key in ("cost", "running_cost", "state", "y_true",
+                                                 "failure_reason", "time", "force"))
 _REASON_NAMES = np.array([FAIL_REASONS[c] for c in range(len(FAIL_REASONS))], dtype=object)
 
 
@@ -688,18 +689,17 @@ class CartPoleLQGVectorEnv(VectorEnv):
             raise PendulumLQGError("step: call reset() before the first step")
         sim, n = self._sim, self.num_envs
         u = self._actions.forces(actions, n)
-        if not self._waiting.any():             # the common case: every sub-env is running
+        if np.count_nonzero(self._waiting) == 0:   # the common case: every sub-env is running
             res = sim.step(u)
             self._running_cost += res.cost
             terminated = res.failed.copy()
             truncated = sim.period >= self.max_episode_steps          # TimeLimit's rule
-            if not (terminated.any() or truncated.any()):           # ... and keeps running
-                reward = step_reward(res.cost, terminated, self._scale_dt)
+            if np.count_nonzero(terminated) == 0 and np.count_nonzero(truncated) == 0:
+                reward = step_reward(res.cost, terminated, self._scale_dt)   # ... still running
                 self._obs = self._observe(self._all)
-                infos = self._infos(self._all, res.cost, res.reason,
-                                    self._actions.applied(u))
+                infos = self._infos(self._all, res.cost, res.reason, res.requested)
                 return self._obs.copy(), reward, terminated, truncated, infos
-            return self._step_end(u, res, np.zeros(0, dtype=np.int64), truncated)
+            return self._step_end(res, np.zeros(0, dtype=np.int64), truncated)
         waiting = np.nonzero(self._waiting)[0]
         if self.autoreset_mode == AutoresetMode.DISABLED:
             raise PendulumLQGError(f"step: sub-env(s) {waiting.tolist()} ended; reset them with "
@@ -708,16 +708,15 @@ class CartPoleLQGVectorEnv(VectorEnv):
         u[waiting] = 0.0
         res = sim.step(u)
         self._running_cost += res.cost
-        return self._step_end(u, res, waiting, sim.period >= self.max_episode_steps)
+        return self._step_end(res, waiting, sim.period >= self.max_episode_steps)
 
-    def _step_end(self, u: np.ndarray, res: StepResult, waiting: np.ndarray,
-                  truncated: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                                  np.ndarray, dict[str, Any]]:
+    def _step_end(self, res: StepResult, waiting: np.ndarray, truncated: np.ndarray,
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """The rest of :meth:`step` when some sub-env ends, or waited for its reset."""
         sim, n = self._sim, self.num_envs
         terminated = res.failed.copy()
         reward = step_reward(res.cost, terminated, self._scale_dt)
-        force = self._actions.applied(u)
+        force = res.requested.copy()
         cost, reason = res.cost.copy(), res.reason.copy()
         if waiting.size:                       # NEXT_STEP: this step is their reset
             terminated[waiting] = truncated[waiting] = False
@@ -757,7 +756,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
         n, sim = self.num_envs, self._sim
         values: dict[str, np.ndarray]
         if rows.size == n:          # the common step: whole arrays, each the info's own copy
-            mask = np.ones(n, dtype=bool)
+            masks = np.ones((len(_INFO_KEYS), n), dtype=bool)
             state = sim.x.copy()
             values = {"cost": np.array(cost, dtype=float),
                       "running_cost": self._running_cost.copy(), "state": state,
@@ -769,7 +768,8 @@ class CartPoleLQGVectorEnv(VectorEnv):
                 out[rows] = values
                 return out
 
-            mask = np.isin(np.arange(n), rows)
+            masks = np.zeros((len(_INFO_KEYS), n), dtype=bool)
+            masks[:, rows] = True
             state = spread(sim.x[rows])
             values = {
                 "cost": spread(cost), "running_cost": spread(self._running_cost[rows]),
@@ -777,9 +777,9 @@ class CartPoleLQGVectorEnv(VectorEnv):
                 "failure_reason": spread(_REASON_NAMES[reason], None, object),
                 "time": spread(sim.t[rows]), "force": spread(force)}
         out: dict[str, Any] = {}
-        for key, arr in values.items():
-            out[key] = arr
-            out["_" + key] = mask.copy()
+        for (key, mask_key), mask in zip(_INFO_KEYS, masks, strict=True):
+            out[key] = values[key]
+            out[mask_key] = mask        # one row of one block each: the masks share no memory
         return out
 
     def render(self) -> tuple[np.ndarray, ...] | None:

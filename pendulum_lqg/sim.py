@@ -239,6 +239,8 @@ class StepResult:
     failed : (n,) bool, the episode ended in this period
     reason : (n,) int failure codes (``metrics.FAIL_*``)
     states : (n, k, 4) physics-rate states over the period (always available; cheap views)
+    requested : (n,) the requested force after saturation (before the actuator's delay line
+        and lag): what a gymnasium env reports as ``info["force"]``
     forces : (n, k) the force applied over each physics step (after saturation, actuator delay
         and lag; a view, valid until the next step)
     """
@@ -248,6 +250,7 @@ class StepResult:
     failed: np.ndarray
     reason: np.ndarray
     states: np.ndarray
+    requested: np.ndarray
     forces: np.ndarray | None = None
 
 
@@ -339,13 +342,14 @@ class Simulator:
     def __getstate__(self) -> dict[str, object]:
         state = self.__dict__.copy()
         state["_physics"] = None                 # a thread pool does not pickle
-        state.pop("_row0", None)                 # views: pickled, they would become copies
+        for name in ("_row0", "_views"):         # views: pickled, they would become copies
+            state.pop(name, None)
         return state
 
     def __setstate__(self, state: dict[str, object]) -> None:
         self.__dict__.update(state)
         if self._capacity:
-            self._row0 = _RowViews(self, self.k)
+            self._row0 = self._views = _PeriodViews(self, 1)
             self._make_physics()
 
     def _make_physics(self) -> None:
@@ -370,7 +374,7 @@ class Simulator:
         self._limits_flat = np.tile(self._limits_row, size // 5)
         self._scratch = np.empty(size)
         self._inside = np.empty(size, dtype=bool)
-        self._row0 = _RowViews(self, self.k)
+        self._row0 = self._views = _PeriodViews(self, 1)
 
     # ---- episodes ----------------------------------------------------------------------------
     def reset(self, generators: list[np.random.Generator], *, ids: np.ndarray | None = None,
@@ -489,13 +493,14 @@ class Simulator:
         if bad_u is not None:
             u = np.where(bad_u, 0.0, u)
         # saturation (np.minimum/np.maximum: np.clip's values, at a fraction of its overhead)
-        u = np.minimum(np.maximum(u, -self.u_max), self.u_max)
+        u = requested = np.minimum(np.maximum(u, -self.u_max), self.u_max)
         u_steps = None
         if not self._plain_actuation:        # delay line and/or lag: u becomes the applied force
             u, u_steps = self._actuate(u)
-        buf = self._period_buf[:n]
-        buf[:, 0, :4] = self.x
-        states = buf[:, 1:k + 1, :4]
+        v = self._views if self._views.n == n else self._views_of(n)
+        buf = v.buf
+        v.start[...] = self.x
+        states = v.states
         forces = self.noise.forces(self._w) if self._force_noise else None
         held = u if u_steps is None else u_steps
         if self._linear is not None:
@@ -504,24 +509,34 @@ class Simulator:
             reset_flag = self._advance_rollout(held, forces, buf)
         else:
             reset_flag = self._advance_step(held, forces, states)
-        buf[:, :k, 4] = u[:, None] if u_steps is None else u_steps  # after the physics
+        v.u[...] = u[:, None] if u_steps is None else u_steps        # after the physics
         # state noise: one jump per period at its end (x ← x + δx)
         if self._state_noise:
-            np.add(buf[:, k, :4], self._w, out=buf[:, k + 1, :4])
+            np.add(v.last, self._w, out=v.end)
         else:
-            buf[:, k + 1, :4] = buf[:, k, :4]
-        failed, reason, fail_step = self._detect_failure(buf, reset_flag)
+            v.end[...] = v.last
+        if np.count_nonzero(reset_flag) == 0 and _all_inside(v.flat, v.limits, v.scratch,
+                                                             v.inside):
+            failed, reason, fail_step = np.zeros(n, dtype=bool), np.zeros(n, dtype=np.int8), None
+        else:
+            failed, reason, fail_step = self._detect_failure(buf, reset_flag)
         if bad_u is not None and bad_u.any():
             failed = failed | bad_u
             reason = np.where(bad_u, FAIL_DIVERGED, reason).astype(np.int8)
             fail_step = np.where(bad_u, 0, k if fail_step is None else fail_step)
-        return self._finish_period(buf, u, x_hat, failed, reason, fail_step)
+        return self._finish_period(v, u, requested, x_hat, failed, reason, fail_step)
+
+    def _views_of(self, n: int) -> _PeriodViews:
+        """The views of the period buffer's first ``n`` rows (kept for the last ``n`` asked)."""
+        self._views = _PeriodViews(self, n)
+        return self._views
 
     def _step_single(self, u: float, x_hat: np.ndarray | None) -> StepResult:
         """:meth:`step` for one row (a one-episode run): :meth:`_period_single`, then the same
         metrics as the batch."""
-        buf, failed, reason, fail_step = self._period_single(u)
-        return self._finish_period(buf, np.array([u]), x_hat, failed, reason, fail_step)
+        _, failed, reason, fail_step = self._period_single(u)
+        u_arr = np.array([u])
+        return self._finish_period(self._row0, u_arr, u_arr, x_hat, failed, reason, fail_step)
 
     def _period_single(self, u: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                  np.ndarray | None]:
@@ -571,12 +586,12 @@ class Simulator:
         self.x[...] = self._row0.end
         return cost, int(reason[0])
 
-    def _finish_period(self, buf: np.ndarray, u: np.ndarray, x_hat: np.ndarray | None,
-                       failed: np.ndarray, reason: np.ndarray, fail_step: np.ndarray | None,
-                       ) -> StepResult:
-        """Cost and metrics of the period in ``buf`` (n, k+2, 5); advance time and state."""
-        n, k = buf.shape[0], self.k
-        z = buf[:, :k]
+    def _finish_period(self, v: _PeriodViews, u: np.ndarray, requested: np.ndarray,
+                       x_hat: np.ndarray | None, failed: np.ndarray, reason: np.ndarray,
+                       fail_step: np.ndarray | None) -> StepResult:
+        """Cost and metrics of the period in the buffer of ``v``; advance time and state. ``u``:
+        the applied command of each row, ``requested`` the requested force after saturation."""
+        buf, z, n = v.buf, v.z, v.n
         if self.metrics is not None:
             x_fail = None if fail_step is None else buf[np.arange(n), fail_step + 1, :4]
             cost = self.metrics.accumulate(self._id_index, z, u, x_hat, failed, reason, fail_step,
@@ -585,9 +600,9 @@ class Simulator:
             cost = period_integrals(z, fail_step, h=self.h, weights=self.weights)[2]
         self.t = self.t + self.dt
         self.period = self.period + 1
-        self.x = buf[:, k + 1, :4].copy()
-        return StepResult(x=self.x, cost=cost, failed=failed, reason=reason,
-                          states=buf[:, 1:k + 1, :4], forces=buf[:, :k, 4])
+        self.x = v.end.copy()
+        return StepResult(x=self.x, cost=cost, failed=failed, reason=reason, states=v.states,
+                          forces=v.u, requested=requested)
 
     def park(self, rows: np.ndarray) -> None:
         """Put rows whose episode ended, and that wait for a reset, at rest upright (x = 0, no
@@ -718,25 +733,17 @@ class Simulator:
                 reset_flag[r] = abs(d.time - self.k * self.h) > 0.5 * self.h
         return reset_flag
 
-    def _within_limits(self, buf: np.ndarray) -> bool:
-        """The failure check's fast path, the common case: every ``|z_i| < limit_i`` over the
-        whole period buffer (the start and end states too: a stricter test than the full one),
-        so the full checks of :meth:`_detect_failure` would find no failure (a nan fails the
-        comparison). ``buf`` is the C-contiguous ``_period_buf[:n]``."""
-        m = buf.size
-        return _all_inside(buf.reshape(-1), self._limits_flat[:m], self._scratch[:m],
-                           self._inside[:m])
-
     def _detect_failure(self, buf: np.ndarray, reset_flag: np.ndarray,
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """Failure of each row in the period ``buf`` (n, k+2, 5) = ``[x, u]`` at [the start | the
         k physics steps | the end]: ``failed``, the reason codes and the first failing physics
-        step (``k`` if none), or ``None`` for the latter when no row failed."""
+        step (``k`` if none), or ``None`` for the latter when no row failed. (The callers first
+        try the fast path, :func:`_all_inside` on :class:`_PeriodViews`.)"""
         sc = self.scenario
         n, k = buf.shape[0], self.k
         failed = np.zeros(n, dtype=bool)
         reason = np.zeros(n, dtype=np.int8)                      # FAIL_NONE is 0
-        if n == 0 or (self._within_limits(buf) and not reset_flag.any()):
+        if n == 0:
             return failed, reason, None
         states, x_end = buf[:, 1:k + 1, :4], buf[:, k + 1, :4]
         with np.errstate(invalid="ignore"):
@@ -768,19 +775,29 @@ def _all_inside(z: np.ndarray, limits: np.ndarray, scratch: np.ndarray, inside: 
     return bool(np.count_nonzero(inside) == inside.size)
 
 
-class _RowViews:
-    """Views of row 0 of a simulator's buffers, made once for :meth:`Simulator._step_single`."""
+class _PeriodViews:
+    """Views of the first ``n`` rows of a simulator's period buffer ``(n, k+2, 5)``, made once
+    for a row count (slicing a 3-d array costs as much as the small copies through it).
 
-    def __init__(self, sim: Simulator, k: int) -> None:
-        self.buf = sim._period_buf[:1]
-        self.z = self.buf[:, :k]
-        size = self.buf.size             # the failure check's fast path on the flat row
-        self.flat, self.limits = self.buf.reshape(-1), sim._limits_flat[:size]
+    ``buf`` the rows, ``z`` their ``[x, u]`` at the start of each physics step, ``start``,
+    ``last`` and ``end`` the states (n, 4) at the start, after the k-th step and after the state
+    noise, ``states`` (n, k, 4) after each step, ``u`` (n, k) the force of each step. The failure
+    check's fast path runs on the rows flattened (one contiguous run: a fraction of the cost of
+    the same ufuncs on 3-d views), with the limits of every entry and two scratches: ``flat``,
+    ``limits``, ``scratch``, ``inside`` (see :func:`_all_inside`; the start and end states are in
+    the run too, which makes it a stricter test than the full checks of
+    :meth:`Simulator._detect_failure`: passing it, they would find no failure; a nan fails it).
+    """
+
+    def __init__(self, sim: Simulator, n: int) -> None:
+        k = sim.k
+        self.n = n
+        self.buf = b = sim._period_buf[:n]
+        self.z, self.states, self.u = b[:, :k], b[:, 1:k + 1, :4], b[:, :k, 4]
+        self.start, self.last, self.end = b[:, 0, :4], b[:, k, :4], b[:, k + 1, :4]
+        size = b.size
+        self.flat, self.limits = b.reshape(-1), sim._limits_flat[:size]
         self.scratch, self.inside = sim._scratch[:size], sim._inside[:size]
-        b = self.buf[0]
-        self.u = b[:k, 4]
-        # (1, 4) like the one-row x and process noise they meet
-        self.start, self.last, self.end = b[0:1, :4], b[k:k + 1, :4], b[k + 1:k + 2, :4]
 
 
 class BatchPhysics:
