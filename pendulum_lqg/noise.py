@@ -194,13 +194,20 @@ class NoiseStream:
             z = self._block[c]
             return z[:, : self.n_proc], z[:, self.n_proc:]
         self._per_row()
-        rows = np.arange(self.n) if rows is None else np.asarray(rows)
-        for r in rows[self._pos[rows] >= CHUNK_PERIODS].tolist():
-            self._refill(r)
-            self._pos[r] = 0
-        pos = self._pos[rows]
-        self._pos[rows] += 1
-        z = self._block[pos, rows]
+        every = rows is None            # every row at its own position: no gather of positions
+        idx = np.arange(self.n) if rows is None else np.asarray(rows)
+        pos = self._pos if every else self._pos[idx]
+        due = pos >= CHUNK_PERIODS
+        if np.count_nonzero(due):
+            for r in idx[due].tolist():
+                self._refill(r)
+                self._pos[r] = 0
+            pos = self._pos if every else self._pos[idx]
+        z = self._block[pos, idx]
+        if every:
+            pos += 1
+        else:
+            self._pos[idx] += 1
         return z[:, : self.n_proc], z[:, self.n_proc:]
 
     def select(self, rows: np.ndarray) -> None:
