@@ -12,6 +12,10 @@
   sensor data of every step;
 * **closed loop**: :func:`~pendulum_lqg.sim.run_episodes` with DLQR + steady-state Kalman under the
   lecture noise (policy, noise, saturation, failure detection and metrics included);
+* **shard idle**: the closed loop runs as fixed shards of episodes, one per thread
+  (:func:`~pendulum_lqg.sim.shard_count`); the share of their thread time spent waiting for the
+  last one to end (:func:`shard_idle`) is lost to the ratio — where ``Batch.step`` and the rollout
+  hand out simulations to whichever thread is free;
 * **single-episode path**: the plain ``mj_step`` backend, one episode at a time;
 * **memory** (optional): peak traced allocations of 1000-episode runs of 2 s and 10 s — streamed
   metrics mean the peak must not grow with the episode length.
@@ -102,6 +106,17 @@ def raw_batch_rate(plant: object, episodes: int, nstep: int, nthread: int, *,
     return calls * episodes * nstep / (time.perf_counter() - t)
 
 
+def shard_idle(shard_seconds: list[tuple[float, float]]) -> float:
+    """The share of the shards' thread time spent idle, waiting for the last shard to end:
+    ``Σ (end_last − end_i) / (shards · end_last)`` over ``(start, end)`` times since the run
+    started (0 for one shard). Shards are fixed sets of episodes, so a thread that finishes its
+    shard first (a faster core, a shard started earlier) has nothing left to run."""
+    if len(shard_seconds) < 2:
+        return 0.0
+    last = max(end for _, end in shard_seconds)
+    return sum(last - end for _, end in shard_seconds) / (len(shard_seconds) * last)
+
+
 def faster_series(series: dict[str, list[float]]) -> str:
     """The name of the series (rates, higher is faster) with the highest median: the baseline
     whose runs, pair by pair, the contender is compared with."""
@@ -121,6 +136,7 @@ def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None
     raw_rollout: list[float] = []
     raw_batch: list[float] = []
     closed: list[float] = []
+    idle: list[float] = []
     with_outputs: list[float] = []
     run_episodes(plant, scenario.replace(duration=scenario.control_period * 5), policy,
                  seed=0, episodes=range(8), nthread=nthread)   # warm-up (imports, pools)
@@ -133,6 +149,7 @@ def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None
         elapsed = time.perf_counter() - t
         steps = sum(round(float(r["duration"]) / plant.timestep) for r in res.rows)
         closed.append(steps / elapsed)
+        idle.append(shard_idle(res.shard_seconds))
         with_outputs.append(raw_rollout_rate(plant, episodes, nstep, nthread, outputs=True))
         log(f"repeat {i + 1}/{repeats}: bare physics: rollout {raw_rollout[-1]:,.0f}, batch "
             f"{raw_batch[-1]:,.0f} steps/s; closed loop {closed[-1]:,.0f} steps/s; physics with "
@@ -155,7 +172,7 @@ def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None
         "shards": shard_count(episodes, nthread, "rollout", policy),
         "raw_steps_per_s": raw, "bare_baseline": baseline, "bare_rollout_steps_per_s": raw_rollout,
         "bare_batch_steps_per_s": raw_batch, "closed_loop_steps_per_s": closed,
-        "pair_ratios": pair_ratios, "ratio": ratio,
+        "pair_ratios": pair_ratios, "ratio": ratio, "shard_idle_fraction": idle,
         "raw_with_outputs_steps_per_s": with_outputs, "ratio_vs_outputs": out_ratio,
         "single_episode_steps_per_s": single,
     }
@@ -171,6 +188,9 @@ def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None
         f"pairs {min(pair_ratios):.3f}–{max(pair_ratios):.3f}; target ≥ 0.90)",
         f"  vs physics writing state + sensors:   {out_ratio:>12.3f}   "
         f"({statistics.median(with_outputs):,.0f} steps/s)",
+        f"shards idle while the last one runs:    {100 * statistics.median(idle):>11.1f} %   "
+        f"(median; {100 * min(idle):.1f}–{100 * max(idle):.1f} %; "
+        f"{out['shards']} shards, fixed at the start)",
         f"single-episode path (mj_step loop):     {single:>12,.0f} physics steps/s",
     ]
     if memory:

@@ -36,6 +36,7 @@ import copy
 import dataclasses
 import math
 import threading
+import time
 from collections.abc import Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -1087,10 +1088,16 @@ class Trajectory:
 
 @dataclass
 class BatchResult:
-    """Per-episode metric rows (and trajectories on request) of one batch run."""
+    """Per-episode metric rows (and trajectories on request) of one batch run.
+
+    ``shard_seconds``: when each shard (:func:`shard_count`) started and ended, in seconds of
+    ``time.perf_counter`` since the run started, one ``(start, end)`` per shard: a diagnostic of
+    how evenly the shards shared the threads (``pendulum-lqg perf`` reports it).
+    """
 
     rows: list[dict[str, Any]]
     trajectories: list[Trajectory] | None = None
+    shard_seconds: list[tuple[float, float]] = field(default_factory=list)
 
 
 class _TrajectoryLog:
@@ -1217,9 +1224,10 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: Any, *, seed: int,
     episodes = [int(e) for e in episodes]
     nthread = thread_count(nthread)
     shards = shard_count(len(episodes), nthread, backend, policy)
+    t0 = time.perf_counter()
     if shards == 1:
         return _run_batch(plant, scenario, policy, seed, episodes, backend, nthread, trajectory,
-                          initial_states, None)
+                          initial_states, None, t0)
     parts = np.array_split(np.arange(len(episodes)), shards)
     stop = threading.Event()
     with ThreadPoolExecutor(max_workers=min(shards, nthread),
@@ -1227,7 +1235,7 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: Any, *, seed: int,
         futures = [pool.submit(_run_batch, plant, scenario, copy.deepcopy(policy), seed,
                                [episodes[i] for i in part], backend, 1, trajectory,
                                None if initial_states is None
-                               else np.asarray(initial_states)[part], stop)
+                               else np.asarray(initial_states)[part], stop, t0)
                    for part in parts]
         try:
             results = [f.result() for f in futures]
@@ -1237,13 +1245,17 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: Any, *, seed: int,
     rows = [r for res in results for r in res.rows]
     trajectories = None if not trajectory else [
         tr for res in results for tr in (res.trajectories or [])]
-    return BatchResult(rows=rows, trajectories=trajectories)
+    return BatchResult(rows=rows, trajectories=trajectories,
+                       shard_seconds=[t for res in results for t in res.shard_seconds])
 
 
 def _run_batch(plant: Plant, scenario: Scenario, policy: Any, seed: int, episodes: list[int],
                backend: Literal["rollout", "step"], nthread: int, trajectory: bool,
-               initial_states: np.ndarray | None, stop: threading.Event | None) -> BatchResult:
-    """:func:`run_episodes` on one batch (one :class:`Simulator`)."""
+               initial_states: np.ndarray | None, stop: threading.Event | None,
+               t0: float) -> BatchResult:
+    """:func:`run_episodes` on one batch (one :class:`Simulator`); ``t0``: the run's start
+    (``time.perf_counter``), for :attr:`BatchResult.shard_seconds`."""
+    start = time.perf_counter() - t0
     seeds = [episode_seed(seed, e) for e in episodes]
     gens = [np.random.default_rng(s) for s in seeds]
     n = len(episodes)
@@ -1285,4 +1297,5 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: Any, seed: int, episode
     if trajectories is not None:
         for tr, e in zip(trajectories, episodes, strict=True):
             tr.episode = e
-    return BatchResult(rows=rows, trajectories=trajectories)
+    return BatchResult(rows=rows, trajectories=trajectories,
+                       shard_seconds=[(start, time.perf_counter() - t0)])

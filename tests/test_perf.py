@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import statistics
 
-from pendulum_lqg.perf import run_perf
+import pytest
+
+from pendulum_lqg.perf import run_perf, shard_idle
 
 
 def test_perf_baseline_is_the_faster_bare_physics_and_the_ratio_the_median_of_pairs():
@@ -24,4 +26,12 @@ def test_perf_baseline_is_the_faster_bare_physics_and_the_ratio_the_median_of_pa
     assert out["ratio"] == statistics.median(pairs)
     assert out["episodes"] == 16 and out["steps_per_period"] == 10 and out["repeats"] == 3
     assert any("target ≥ 0.90" in line for line in out["report"])
+    assert out["shards"] == 1 and out["shard_idle_fraction"] == [0.0, 0.0, 0.0]
+
+
+def test_shard_idle_is_the_thread_time_spent_waiting_for_the_last_shard():
+    """Two shards ending at 9 s and 10 s: one thread waits 1 s of the 2 × 10 s → 5 %."""
+    assert shard_idle([(0.0, 9.0), (0.5, 10.0)]) == pytest.approx(0.05)
+    assert shard_idle([(0.0, 4.0), (0.0, 4.0), (0.0, 2.0)]) == pytest.approx(2 / 12)
+    assert shard_idle([(0.0, 3.0)]) == 0.0 and shard_idle([]) == 0.0
 

@@ -106,6 +106,9 @@ def test_sharded_batches_and_the_single_row_path_equal_one_batch(plant):
     whole = run_episodes(plant, sc, pol(), seed=5, episodes=range(n), nthread=1, trajectory=True)
     assert _dump(sharded.rows) == _dump(whole.rows)
     assert 0 < sum(r["success"] for r in whole.rows) < n          # both outcomes are exercised
+    # each shard's (start, end) since the run's start, in shard order; one for one batch
+    assert len(sharded.shard_seconds) == 2 and len(whole.shard_seconds) == 1
+    assert all(0 <= a < b for a, b in sharded.shard_seconds + whole.shard_seconds)
     for a, b in zip(sharded.trajectories, whole.trajectories, strict=True):
         assert a.episode == b.episode
         assert np.array_equal(a.states, b.states) and np.array_equal(a.u, b.u)
