@@ -21,11 +21,16 @@
   metrics mean the peak must not grow with the episode length.
 
 Bare physics and the closed loop alternate ``repeats`` times; the ratio is the median of the
-per-pair ratios, so a slow spell of the machine affects both sides of a pair.
+per-pair ratios, so a slow spell of the machine affects both sides of a pair. Each timed call
+starts after a full garbage collection (``gc.collect()``): a collection of the whole heap, which
+the objects of earlier calls would otherwise trigger inside whichever call came next, takes
+~55 ms here (2–3 % of a closed-loop run); each call still pays for the collections its own
+allocations cause.
 """
 
 from __future__ import annotations
 
+import gc
 import statistics
 import time
 import tracemalloc
@@ -141,8 +146,11 @@ def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None
     run_episodes(plant, scenario.replace(duration=scenario.control_period * 5), policy,
                  seed=0, episodes=range(8), nthread=nthread)   # warm-up (imports, pools)
     for i in range(repeats):
+        gc.collect()
         raw_rollout.append(raw_rollout_rate(plant, episodes, nstep, nthread))
+        gc.collect()
         raw_batch.append(raw_batch_rate(plant, episodes, nstep, nthread))
+        gc.collect()
         t = time.perf_counter()
         res = run_episodes(plant, scenario, policy, seed=i, episodes=range(episodes),
                            nthread=nthread)
@@ -150,6 +158,8 @@ def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None
         steps = sum(round(float(r["duration"]) / plant.timestep) for r in res.rows)
         closed.append(steps / elapsed)
         idle.append(shard_idle(res.shard_seconds))
+        del res
+        gc.collect()
         with_outputs.append(raw_rollout_rate(plant, episodes, nstep, nthread, outputs=True))
         log(f"repeat {i + 1}/{repeats}: bare physics: rollout {raw_rollout[-1]:,.0f}, batch "
             f"{raw_batch[-1]:,.0f} steps/s; closed loop {closed[-1]:,.0f} steps/s; physics with "
