@@ -204,11 +204,20 @@ def test_noise_is_drawn_in_blocks_independent_of_batch_and_length():
     b = NoiseStream(noise, steps_per_period=10, dt=0.01, h=0.001)
     a.reset([np.random.default_rng(s) for s in (11, 12, 13)])
     b.reset([np.random.default_rng(12)])
-    for i in range(600):                                     # crosses block boundaries
-        za = a.draw() if i < 300 else a.draw(np.arange(3))   # common cursor, then per row
+    fresh = NoiseStream(noise, steps_per_period=10, dt=0.01, h=0.001)
+    for i in range(800):                                     # crosses block boundaries
+        if i == 450:                # row 0 restarts: the rows are at different positions now
+            a.reset([np.random.default_rng(99)], rows=np.array([0]))
+            fresh.reset([np.random.default_rng(99)])
+        # the common cursor, then per row for chosen rows, then per row for every row
+        za = a.draw() if i < 300 or i >= 400 else a.draw(np.arange(3))
         zb = b.draw(np.arange(1))
         np.testing.assert_array_equal(za[0][1], zb[0][0])
         np.testing.assert_array_equal(za[1][1], zb[1][0])
+        if i >= 450:
+            zf = fresh.draw()
+            np.testing.assert_array_equal(za[0][0], zf[0][0])
+            np.testing.assert_array_equal(za[1][0], zf[1][0])
     # in physical units: v = σ_v · z with the generator's own normals
     c = NoiseStream(noise, steps_per_period=10, dt=0.01, h=0.001)
     c.reset([np.random.default_rng(12)])
