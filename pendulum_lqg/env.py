@@ -497,10 +497,10 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         self._sim.close()
 
 
-#: ``FAIL_REASONS`` indexed by code, for the vector infos.
 #: the vector env's info keys, each with its mask's key (Gymnasium's ``_key``), in order
 _INFO_KEYS = tuple((key, "_" + key) for key in ("cost", "running_cost", "state", "y_true",
                                                  "failure_reason", "time", "force"))
+#: ``FAIL_REASONS`` indexed by code, for the vector infos.
 _REASON_NAMES = np.array([FAIL_REASONS[c] for c in range(len(FAIL_REASONS))], dtype=object)
 
 
