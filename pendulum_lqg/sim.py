@@ -516,11 +516,7 @@ class Simulator:
             np.add(v.last, self._w, out=v.end)
         else:
             v.end[...] = v.last
-        if np.count_nonzero(reset_flag) == 0 and _all_inside(v.flat, v.limits, v.scratch,
-                                                             v.inside):
-            failed, reason, fail_step = np.zeros(n, dtype=bool), np.zeros(n, dtype=np.int8), None
-        else:
-            failed, reason, fail_step = self._detect_failure(buf, reset_flag)
+        failed, reason, fail_step = self._detect_failure(v, reset_flag)
         if bad_u is not None and bad_u.any():
             failed = failed | bad_u
             reason = np.where(bad_u, FAIL_DIVERGED, reason).astype(np.int8)
@@ -560,9 +556,9 @@ class Simulator:
         else:
             v.end[...] = v.last
         buf = v.buf
-        if not reset and _all_inside(v.flat, v.limits, v.scratch, v.inside):
-            return buf, _NOT_FAILED, _NO_REASON, None       # _within_limits on row 0's views
-        return (buf, *self._detect_failure(buf, np.array([reset])))
+        if not reset and v.within_limits():      # no failure: no per-row arrays for one row
+            return buf, _NOT_FAILED, _NO_REASON, None
+        return (buf, *self._detect_failure(v, np.array([reset])))
 
     def step_one(self, u: float) -> tuple[float, int]:
         """One control period of a one-row simulator (the single gymnasium env) with the force
@@ -734,17 +730,17 @@ class Simulator:
                 reset_flag[r] = abs(d.time - self.k * self.h) > 0.5 * self.h
         return reset_flag
 
-    def _detect_failure(self, buf: np.ndarray, reset_flag: np.ndarray,
+    def _detect_failure(self, v: _PeriodViews, reset_flag: np.ndarray,
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """Failure of each row in the period ``buf`` (n, k+2, 5) = ``[x, u]`` at [the start | the
-        k physics steps | the end]: ``failed``, the reason codes and the first failing physics
-        step (``k`` if none), or ``None`` for the latter when no row failed. (The callers first
-        try the fast path, :func:`_all_inside` on :class:`_PeriodViews`.)"""
+        """Failure of each row in the period buffer of ``v``, (n, k+2, 5) = ``[x, u]`` at [the
+        start | the k physics steps | the end]: ``failed``, the reason codes and the first failing
+        physics step (``k`` if none), or ``None`` for the latter when no row failed."""
         sc = self.scenario
-        n, k = buf.shape[0], self.k
+        buf: np.ndarray = v.buf
+        n, k = v.n, self.k
         failed = np.zeros(n, dtype=bool)
         reason = np.zeros(n, dtype=np.int8)                      # FAIL_NONE is 0
-        if n == 0:
+        if n == 0 or (np.count_nonzero(reset_flag) == 0 and v.within_limits()):
             return failed, reason, None
         states, x_end = buf[:, 1:k + 1, :4], buf[:, k + 1, :4]
         with np.errstate(invalid="ignore"):
@@ -767,15 +763,6 @@ class Simulator:
         return failed, reason, None
 
 
-def _all_inside(z: np.ndarray, limits: np.ndarray, scratch: np.ndarray, inside: np.ndarray,
-                ) -> bool:
-    """Every entry of the 1-d ``z`` strictly below its limit in magnitude (``scratch``,
-    ``inside``: float and bool scratches of that shape). ``count_nonzero`` is a plain C count, a
-    fraction of a ufunc reduction's cost (``all``/``max``) on small arrays."""
-    np.less(np.abs(z, out=scratch), limits, out=inside)
-    return bool(np.count_nonzero(inside) == inside.size)
-
-
 class _PeriodViews:
     """Views of the first ``n`` rows of a simulator's period buffer ``(n, k+2, 5)``, made once
     for a row count (slicing a 3-d array costs as much as the small copies through it).
@@ -783,11 +770,7 @@ class _PeriodViews:
     ``buf`` the rows, ``z`` their ``[x, u]`` at the start of each physics step, ``start``,
     ``last`` and ``end`` the states (n, 4) at the start, after the k-th step and after the state
     noise, ``states`` (n, k, 4) after each step, ``u`` (n, k) the force of each step. The failure
-    check's fast path runs on the rows flattened (one contiguous run: a fraction of the cost of
-    the same ufuncs on 3-d views), with the limits of every entry and two scratches: ``flat``,
-    ``limits``, ``scratch``, ``inside`` (see :func:`_all_inside`; the start and end states are in
-    the run too, which makes it a stricter test than the full checks of
-    :meth:`Simulator._detect_failure`: passing it, they would find no failure; a nan fails it).
+    check's fast path, :meth:`within_limits`, runs on the rows flattened.
     """
 
     def __init__(self, sim: Simulator, n: int) -> None:
@@ -799,6 +782,15 @@ class _PeriodViews:
         size = b.size
         self.flat, self.limits = b.reshape(-1), sim._limits_flat[:size]
         self.scratch, self.inside = sim._scratch[:size], sim._inside[:size]
+
+    def within_limits(self) -> bool:
+        """The failure check's fast path: every ``|z_i| < limit_i`` over the rows (the start and
+        end states too: a stricter test than the full checks of
+        :meth:`Simulator._detect_failure`, which then find no failure; a nan fails it). It runs
+        on the rows flattened, one contiguous run (a fraction of the cost of the same ufuncs on
+        3-d views); ``count_nonzero`` is a plain C count, cheaper than ``all`` on small arrays."""
+        np.less(np.abs(self.flat, out=self.scratch), self.limits, out=self.inside)
+        return bool(np.count_nonzero(self.inside) == self.inside.size)
 
 
 class BatchPhysics:
