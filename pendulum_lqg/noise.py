@@ -16,23 +16,36 @@ Units (THEORY.md §3) — every parameter says which kind it is:
 ``scale`` multiplies the standard deviations of both noises (covariances by ``scale²``); 0 is
 noise-free. The estimator designs use the nominal (``scale = 1``) model unless told otherwise.
 
-Randomness: each episode owns a ``numpy.random.Generator``. Normals are drawn in blocks of
-:data:`CHUNK_PERIODS` control periods with a fixed layout, so an episode's noise is the same whether it
-runs alone or in a batch, and memory does not grow with the episode length.
+Randomness: each episode owns a ``numpy.random.Generator``. Normals are drawn in order from it,
+in blocks of at most :data:`CHUNK_PERIODS` control periods with a fixed layout, so an episode's
+noise is the same whether it runs alone or in a batch, and memory does not grow with the episode
+length.
 """
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
 
 from pendulum_lqg._config import config_vector
-from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.errors import ConfigError, PendulumLQGError
 
 #: Control periods of noise drawn at once per episode.
 CHUNK_PERIODS = 256
+
+#: With a ``horizon`` (:meth:`NoiseStream.reset`), each episode first draws this many periods,
+#: then the rest in large blocks, a share of the batch per period (a staggered ring).
+FIRST_PERIODS = 8
+
+#: Held while a batch's generators draw one after another (a noise refill, the initial states).
+#: Every numpy draw releases the GIL, so two threads doing hundreds of them at once (the shards of
+#: a run, all starting together) hand the GIL back and forth after each draw: two 512-row refills
+#: at once took 30 ms, one alone 10.8 ms (/tmp measurement, this 2-core machine). Taking turns,
+#: the second shard's draws run while the first shard's physics does (which holds no GIL).
+DRAW_LOCK = threading.Lock()
 
 #: The lecture's per-step process-noise covariance of w (``x ← x + T·w``) and its period.
 LECTURE_W_STEP = 0.04
@@ -112,12 +125,12 @@ class NoiseStream:
 
     Each control period consumes, per episode, ``n_proc`` process normals (``4`` for state noise,
     ``2·k`` for force noise redrawn every physics step) followed by 2 measurement normals. A block
-    of :data:`CHUNK_PERIODS` periods is drawn at once and scaled to physical units on the spot, so
-    a period's draw is a view: the state jump ``δx`` (or the ``k`` generalised forces) and the
-    measurement noise ``v``. The block is stored period-major, ``(CHUNK_PERIODS, n, width)``, so
-    a period's noise of the whole batch is one contiguous slab (stored episode-major, each
-    episode's numbers lay ``CHUNK_PERIODS·width`` apart and a draw touched one cache line per
-    episode).
+    of :data:`CHUNK_PERIODS` periods (fewer with a ``horizon``, :meth:`reset`) is drawn at once
+    and scaled to physical units on the spot, so a period's draw is a view: the state jump ``δx``
+    (or the ``k`` generalised forces) and the measurement noise ``v``. The block is stored
+    period-major, ``(periods, n, width)``, so a period's noise of the whole batch is one
+    contiguous slab (stored episode-major, each episode's numbers lay ``periods·width`` apart and
+    a draw touched one cache line per episode).
 
     While every row is at the same period (a batch run, or a single env) the stream keeps one
     cursor for all rows; per-row draws (vector envs, whose rows restart at different periods) switch
@@ -141,31 +154,61 @@ class NoiseStream:
         self._scale = np.concatenate([np.tile(self.proc_std, self.n_proc // self.proc_std.size),
                                       self.meas_std])
         self._gens: list[np.random.Generator] = []
-        self._block = np.zeros((CHUNK_PERIODS, 0, self.width))
-        self._unit = np.empty((CHUNK_PERIODS, self.width))   # one episode's normals, as drawn
+        self._chunk = CHUNK_PERIODS                          # periods per block
+        self._block = np.zeros((self._chunk, 0, self.width))
+        self._unit = np.empty((self._chunk, self.width))     # one episode's normals, as drawn
         self._pos = np.zeros(0, dtype=np.int64)
-        self._cursor: int | None = CHUNK_PERIODS     # the common position, or None (per row)
+        self._cursor: int | None = self._chunk       # the common position, or None (per row)
+        self._horizon: int | None = None             # set: the staggered ring of a batch run
+        self._period = 0                             # ring: periods drawn by the batch so far
+        self._group = np.zeros(0, dtype=np.int64)    # ring: each row's top-up group
+        self._drawn: list[int] = []                  # ring: periods in the ring, per group
 
     @property
     def n(self) -> int:
         return len(self._gens)
 
-    def reset(self, generators: list[np.random.Generator], rows: np.ndarray | None = None) -> None:
-        """Attach generators (all rows, or the given rows of an existing batch)."""
+    def reset(self, generators: list[np.random.Generator], rows: np.ndarray | None = None, *,
+              horizon: int | None = None) -> None:
+        """Attach generators (all rows, or the given rows of an existing batch).
+
+        ``horizon``: the generators serve these episodes only and none runs more than ``horizon``
+        periods (a batch run). The noise is then drawn no further than that, and not all at the
+        first period: each episode draws its first :data:`FIRST_PERIODS` periods there, and the
+        rest in blocks of up to :data:`CHUNK_PERIODS` periods into a ring, one share of the
+        batch per period (a 200-period run of 512 episodes: 64 episodes draw their periods
+        8 … 199 at each of the periods 0 … 7). The numbers are the same — each episode's normals
+        are drawn in order, whatever the blocks — and a run's threads no longer all draw their
+        whole batch at once before their physics starts (:data:`DRAW_LOCK`). Leave it ``None``
+        when a generator outlives its episode (gymnasium envs: the next episode continues it, so
+        where the noise stopped drawing is part of the results); per-row draws need that.
+        """
         if rows is None:
             self._gens = list(generators)
             n = len(generators)
-            self._block = np.zeros((CHUNK_PERIODS, n, self.width))
-            self._pos = np.full(n, CHUNK_PERIODS, dtype=np.int64)
-            self._cursor = CHUNK_PERIODS
+            self._horizon = None if horizon is None else max(1, int(horizon))
+            self._chunk = (CHUNK_PERIODS if self._horizon is None
+                           else min(CHUNK_PERIODS, self._horizon))
+            self._block = np.zeros((self._chunk, n, self.width))
+            self._unit = np.empty((self._chunk, self.width))
+            self._pos = np.full(n, self._chunk, dtype=np.int64)
+            self._cursor = self._chunk
+            if self._horizon is not None:
+                first = min(FIRST_PERIODS, self._chunk)
+                self._period = 0
+                self._group = np.arange(n) % first
+                self._drawn = [0] * first
         else:
             self._per_row()
             for r, g in zip(rows, generators, strict=True):
                 self._gens[r] = g
-            self._pos[rows] = CHUNK_PERIODS
+            self._pos[rows] = self._chunk
 
     def _per_row(self) -> None:
         """Leave the common cursor: from now on each row keeps its own position."""
+        if self._horizon is not None:
+            raise PendulumLQGError("noise: per-row draws and resets need generators that outlive "
+                                   "their episodes (a stream reset without a horizon)")
         if self._cursor is not None:
             self._pos[:] = self._cursor
             self._cursor = None
@@ -173,6 +216,43 @@ class NoiseStream:
     def _refill(self, r: int) -> None:
         self._gens[r].standard_normal(out=self._unit)      # the episode's next CHUNK periods
         np.multiply(self._unit, self._scale, out=self._block[:, r])
+
+    def _draw_ring(self, rows: list[int] | range, start: int, stop: int) -> None:
+        """Periods ``start … stop−1`` of ``rows`` into the ring (period q in slot q mod chunk)."""
+        c = self._chunk
+        m, a = stop - start, start % c
+        unit = self._unit[:m]
+        split = min(m, c - a)                               # the part before the ring wraps
+        with DRAW_LOCK:
+            for r in rows:
+                self._gens[r].standard_normal(out=unit)
+                np.multiply(unit[:split], self._scale, out=self._block[a:a + split, r])
+                if split < m:
+                    np.multiply(unit[split:], self._scale, out=self._block[:m - split, r])
+
+    def _draw_staggered(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`draw` of every row with a horizon: the ring, topped up one group at a time."""
+        p, c, h = self._period, self._chunk, self._horizon
+        assert h is not None
+        if p >= h:
+            raise PendulumLQGError(f"noise: period {p} drawn, past the horizon of {h} periods")
+        groups = len(self._drawn)
+        if p == 0:                                   # every episode's first periods
+            self._draw_ring(range(self.n), 0, groups)
+            self._drawn = [groups] * groups
+        g = p % groups
+        drawn = self._drawn[g]
+        # top up group g when its ring would not last until the group's next turn (p + groups),
+        # or holds at most half a block ahead — never past period p + c − 1 (slot p mod c is
+        # this period's)
+        ahead = drawn - p
+        if drawn < h and (ahead < groups or ahead <= c // 2):
+            stop = min(p + c, h)
+            self._draw_ring(np.flatnonzero(self._group == g).tolist(), drawn, stop)
+            self._drawn[g] = stop
+        self._period = p + 1
+        z = self._block[p % c]
+        return z[:, : self.n_proc], z[:, self.n_proc:]
 
     def draw(self, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The next period's noise of each row (default: every row), in physical units.
@@ -184,11 +264,16 @@ class NoiseStream:
         if not self.enabled:
             n = self.n if rows is None else len(rows)
             return np.zeros((n, self.n_proc)), np.zeros((n, 2))
+        if self._horizon is not None:
+            if rows is not None:
+                self._per_row()                          # raises: not with a horizon
+            return self._draw_staggered()
         c = self._cursor
         if rows is None and c is not None:                # the whole batch in step
-            if c == CHUNK_PERIODS:
-                for r in range(self.n):
-                    self._refill(r)
+            if c == self._chunk:
+                with DRAW_LOCK:
+                    for r in range(self.n):
+                        self._refill(r)
                 c = 0
             self._cursor = c + 1
             z = self._block[c]
@@ -197,11 +282,12 @@ class NoiseStream:
         every = rows is None            # every row at its own position: no gather of positions
         idx = np.arange(self.n) if rows is None else np.asarray(rows)
         pos = self._pos if every else self._pos[idx]
-        due = pos >= CHUNK_PERIODS
+        due = pos >= self._chunk
         if np.count_nonzero(due):
-            for r in idx[due].tolist():
-                self._refill(r)
-                self._pos[r] = 0
+            with DRAW_LOCK:
+                for r in idx[due].tolist():
+                    self._refill(r)
+                    self._pos[r] = 0
             pos = self._pos if every else self._pos[idx]
         z = self._block[pos, idx]
         if every:
@@ -226,6 +312,8 @@ class NoiseStream:
                     self._block[:, i] = self._block[:, r]
             self._block = self._block[:, : rows.size]
         self._pos = self._pos[rows]
+        if self._horizon is not None:
+            self._group = self._group[rows]
 
     def forces(self, w: np.ndarray) -> np.ndarray:
         """Generalised forces (len, k, 2) of a force-noise draw, one per physics step."""

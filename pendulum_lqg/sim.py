@@ -58,8 +58,14 @@ from pendulum_lqg.metrics import (
     period_integrals,
 )
 from pendulum_lqg.names import PLANTS
-from pendulum_lqg.noise import NoiseModel, NoiseStream, UniformStream
+from pendulum_lqg.noise import DRAW_LOCK, NoiseModel, NoiseStream, UniformStream
 from pendulum_lqg.plant import ModelOverrides, Plant, Randomization, load_plant, steps_per_period
+from pendulum_lqg.seeding import (  # noqa: F401 - episode_seed: public here too
+    child_generator,
+    episode_generators,
+    episode_seed,
+    episode_seeds,
+)
 
 #: Any state component beyond this magnitude counts as divergence.
 RUNAWAY = 1e6
@@ -194,39 +200,6 @@ class Scenario:
         d["overrides"] = {k: v for k, v in d["overrides"].items() if v is not None}
         d["randomize"] = {k: list(v) for k, v in d["randomize"].items() if v is not None}
         return d
-
-
-def episode_seed(seed: int, episode: int) -> int:
-    """The integer seed of episode ``episode`` of a run seeded with ``seed``.
-
-    Derived with ``SeedSequence(seed).spawn``: equal to ``SeedSequence(seed).spawn(N)[episode]``'s
-    first word, for any N. ``numpy.random.default_rng(episode_seed(s, k))`` is the generator of that
-    episode — and also what ``gymnasium.Env.reset(seed=episode_seed(s, k))`` makes, so the same
-    episode can be replayed alone, in a batch, or through the gymnasium environment.
-    """
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ConfigError(f"seed: expected a non-negative integer, got {seed!r}")
-    seq = np.random.SeedSequence(int(seed), spawn_key=(int(episode),))
-    return int(seq.generate_state(1, dtype=np.uint32)[0])
-
-
-def child_generator(generator: np.random.Generator) -> np.random.Generator:
-    """The episode's child stream: ``generator.spawn(1)[0]``.
-
-    Drawn from only when a scenario randomises parameters or drops samples, so the episode's own
-    generator — the initial state, then the noise blocks — draws exactly what it draws without
-    those features. The child is made at the episode's reset and draws, in order: the three
-    uniforms of :class:`~pendulum_lqg.plant.Randomization` (if any range is given), then one
-    uniform per control period for the dropouts (if ``dropout > 0``), in blocks. Spawning does not
-    advance the parent; it depends only on the parent's seed sequence and on how many children it
-    spawned before, so ``default_rng(s)`` and ``gymnasium``'s ``reset(seed=s)`` give the same child.
-    """
-    try:
-        return generator.spawn(1)[0]
-    except (AttributeError, TypeError, ValueError) as exc:
-        raise ConfigError("generators: randomize/dropout need generators made from a seed "
-                          "(numpy.random.default_rng(seed)), which can spawn a child stream"
-                          ) from exc
 
 
 @dataclass
@@ -380,7 +353,7 @@ class Simulator:
     # ---- episodes ----------------------------------------------------------------------------
     def reset(self, generators: list[np.random.Generator], *, ids: np.ndarray | None = None,
               rows: np.ndarray | None = None, initial_states: np.ndarray | None = None,
-              ) -> np.ndarray:
+              private_generators: bool = False) -> np.ndarray:
         """Start episodes; returns the initial true states (n, 4).
 
         Each generator first draws the initial state (4 normals), then the noise blocks.
@@ -394,9 +367,14 @@ class Simulator:
         initial_states : (n, 4) explicit initial states instead of the scenario's distribution
             (grids such as region-of-attraction maps); the 4 normals are drawn all the same so
             the noise that follows is unchanged
+        private_generators : nothing draws from the generators after these episodes (a batch
+            run), so the noise is drawn no further than the scenario's last period (the same
+            numbers; see :meth:`NoiseStream.reset`'s ``horizon``). Not for gymnasium envs, whose
+            next episode continues the generator.
         """
         sc = self.scenario
-        z = np.array([g.standard_normal(4) for g in generators]).reshape(-1, 4)
+        with DRAW_LOCK:                           # one draw per generator: see DRAW_LOCK
+            z = np.array([g.standard_normal(4) for g in generators]).reshape(-1, 4)
         x0 = np.asarray(sc.x0) + np.asarray(sc.x0_std) * z
         if initial_states is not None:
             given = np.asarray(initial_states, dtype=float)
@@ -411,7 +389,8 @@ class Simulator:
             self.x = x0
             self.t = np.zeros(n)
             self.period = np.zeros(n, dtype=np.int64)
-            self.noise.reset(generators)
+            self.noise.reset(generators,
+                             horizon=self.n_periods if private_generators else None)
             if self._streamed:
                 self.metrics = MetricsAccumulator(
                     self.ids.max(initial=-1) + 1, h=self.h, k=self.k, weights=self.weights,
@@ -1248,12 +1227,12 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: Any, seed: int, episode
     """:func:`run_episodes` on one batch (one :class:`Simulator`); ``t0``: the run's start
     (``time.perf_counter``), for :attr:`BatchResult.shard_seconds`."""
     start = time.perf_counter() - t0
-    seeds = [episode_seed(seed, e) for e in episodes]
-    gens = [np.random.default_rng(s) for s in seeds]
+    seeds = episode_seeds(seed, episodes)       # = [episode_seed(seed, e) …], hashed at once
+    gens = episode_generators(seeds)            # = [default_rng(s) …]
     n = len(episodes)
     log = _TrajectoryLog() if trajectory else None
     with Simulator(plant, scenario, backend=backend, nthread=nthread) as sim:
-        x0 = sim.reset(gens, initial_states=initial_states)
+        x0 = sim.reset(gens, initial_states=initial_states, private_generators=True)
         if scenario.estimate0 == "true":
             policy.reset(n, x_hat0=x0.copy())
         else:

@@ -227,6 +227,41 @@ def test_noise_is_drawn_in_blocks_independent_of_batch_and_length():
     np.testing.assert_array_equal(v[0], z[0, 4:] * c.meas_std)
 
 
+@pytest.mark.parametrize("process", ["state", "force"])
+@pytest.mark.parametrize("horizon", [1, 5, 8, 9, 13, 16, 17, 200, 256, 300, 1000])
+def test_noise_with_a_horizon_draws_the_same_numbers(horizon, process):
+    """A batch run's stream (``horizon``: a ring topped up one group of rows per period) gives
+    every period exactly the numbers of the fixed blocks, across ring wraps and dropped rows, and
+    draws each episode's normals no further than the horizon."""
+    noise = NoiseModel(process=process, process_density=(1e-3,) * (4 if process == "state" else 2))
+    seeds = list(range(20, 37))                                      # 17 rows: uneven groups
+    fixed = NoiseStream(noise, steps_per_period=3, dt=0.003, h=0.001)
+    ring = NoiseStream(noise, steps_per_period=3, dt=0.003, h=0.001)
+    fixed.reset([np.random.default_rng(s) for s in seeds])
+    gens = [np.random.default_rng(s) for s in seeds]
+    ring.reset(gens, horizon=horizon)
+    rows = np.arange(len(seeds))
+    for p in range(horizon):
+        if p in (3, 140) and rows.size > 2:          # episodes end: both keep the same rows
+            keep = np.arange(rows.size)[1::2]
+            fixed.select(keep)
+            ring.select(keep)
+            rows = rows[keep]
+        wf, vf = fixed.draw()
+        wr, vr = ring.draw()
+        np.testing.assert_array_equal(wr, wf)
+        np.testing.assert_array_equal(vr, vf)
+    with pytest.raises(PendulumLQGError, match="past the horizon"):
+        ring.draw()
+    # each episode drew exactly horizon periods: its generator is where a fresh one is after them
+    for r in rows.tolist():
+        ref = np.random.default_rng(seeds[r])
+        ref.standard_normal(horizon * ring.width)
+        assert gens[r].bit_generator.state == ref.bit_generator.state
+    with pytest.raises(PendulumLQGError, match="per-row draws"):
+        ring.draw(np.arange(1))
+
+
 # ---- failures and divergence ---------------------------------------------------------------------
 def test_a_diverging_row_fails_alone(plant):
     sc = LECTURE.replace(duration=1.0)
