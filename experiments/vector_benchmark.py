@@ -12,6 +12,9 @@ period): ``mujoco.rollout`` calls (with the chunking a rollout-based env would u
 ``mujoco.batch`` ``Batch.step`` calls with the force written before each. The faster of the two
 (the higher median; its runs are then used round by round, :func:`pendulum_lqg.perf.faster_series`)
 is the ceiling: ``native / bare physics`` is the share of it the native env reaches;
+``bare batch, … µs gaps`` makes the same ``Batch.step`` calls with ``--gap`` µs of Python spun
+before each (not timed): no vector env can avoid running Python between steps, and MuJoCo's
+threads, idle that long, go to sleep and wake late (a diagnostic, not the ceiling);
 ``physics / sync`` is the ceiling of the native/sync ratio on this machine (with ``c`` cores it
 grows about like ``c``: the sync env uses one). In each round the contenders take turns block by
 block (``--blocks`` blocks of ``steps / blocks`` steps), so a slow spell of the machine hits all of
@@ -19,7 +22,8 @@ them alike; figures are medians over the rounds, ratios medians of the per-round
 
 Usage::
 
-    uv run python experiments/vector_benchmark.py [--num-envs 64] [--steps 600] [--blocks 20] [--repeats 5]
+    uv run python experiments/vector_benchmark.py [--num-envs 64] [--steps 600] [--blocks 20]
+        [--repeats 5] [--gap 100]
 """
 
 from __future__ import annotations
@@ -67,6 +71,8 @@ def main() -> None:
     ap.add_argument("--blocks", type=int, default=20,
                     help="blocks per round, the contenders taking turns block by block")
     ap.add_argument("--repeats", type=int, default=5, help="rounds")
+    ap.add_argument("--gap", type=float, default=100.0,
+                    help="µs of Python before each call of the 'gaps' contender (default 100)")
     args = ap.parse_args()
     n = args.num_envs
     native = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n)
@@ -80,21 +86,23 @@ def main() -> None:
     bare = {"rollout": lambda: raw_rollout_rate(plant, n, k, nthread, calls=block, outputs=False,
                                                 chunk_size=chunk),
             "batch": lambda: raw_batch_rate(plant, n, k, nthread, calls=block)}
+    gapped = {"gaps": lambda: raw_batch_rate(plant, n, k, nthread, calls=block,
+                                             gap=args.gap * 1e-6)}
     for runner in runners.values():
         runner.reset(seed=0)
         runner.time_steps(20)                                  # warm-up
     print(f"{n} envs, {block * args.blocks} vector steps per contender and round in {args.blocks} "
           f"alternating blocks of {block}, {args.repeats} rounds, seeds 0..{args.repeats - 1}, "
           f"{k} physics steps per env step, {nthread} physics threads")
-    rates: dict[str, list[float]] = {name: [] for name in (*runners, *bare, "physics")}
+    rates: dict[str, list[float]] = {name: [] for name in (*runners, *bare, *gapped, "physics")}
     for r in range(args.repeats):
-        spent = dict.fromkeys((*runners, *bare), 0.0)
+        spent = dict.fromkeys((*runners, *bare, *gapped), 0.0)
         for runner in runners.values():
             runner.reset(seed=r)
         for _ in range(args.blocks):
             for name, runner in runners.items():
                 spent[name] += runner.time_steps(block)
-            for name, rate in bare.items():                  # physics steps/s → seconds
+            for name, rate in {**bare, **gapped}.items():    # physics steps/s → seconds
                 spent[name] += block * n * k / rate()
         for name, secs in spent.items():
             rates[name].append(n * block * args.blocks / secs)
@@ -105,14 +113,20 @@ def main() -> None:
     med = {name: float(np.median(v)) for name, v in rates.items()}
     for name, label in (("native", "native vector env"), ("sync", "SyncVectorEnv"),
                         ("rollout", "bare mujoco.rollout"), ("batch", "bare mujoco.batch"),
+                        ("gaps", f"bare batch, {args.gap:g} µs gaps"),
                         ("physics", f"bare physics ({faster})")):
         print(f"{label:>28}: {med[name]:12,.0f} env steps/s ({med[name] * k:14,.0f} physics "
               f"steps/s; runs {min(rates[name]):,.0f}–{max(rates[name]):,.0f})")
     to_physics = [a / b for a, b in zip(rates["native"], rates["physics"], strict=True)]
+    to_gaps = [a / b for a, b in zip(rates["native"], rates["gaps"], strict=True)]
+    gap_cost = [b / g for b, g in zip(rates["physics"], rates["gaps"], strict=True)]
     to_sync = [a / b for a, b in zip(rates["native"], rates["sync"], strict=True)]
     ceiling = [a / b for a, b in zip(rates["physics"], rates["sync"], strict=True)]
     print(f"{'native / bare physics':>28}: {np.median(to_physics):.3f}   (median of the "
           f"{args.repeats} rounds, {min(to_physics):.3f}–{max(to_physics):.3f}; target ≥ 0.90)")
+    print(f"{'native / physics with gaps':>28}: {np.median(to_gaps):.3f}   (rounds "
+          f"{min(to_gaps):.3f}–{max(to_gaps):.3f}; with the gaps bare physics takes "
+          f"{np.median(gap_cost):.3f}× as long)")
     print(f"{'native / sync':>28}: {np.median(to_sync):.1f}×   (ceiling bare physics / sync "
           f"{np.median(ceiling):.1f}×: no vector env can exceed it here)")
     native.close()

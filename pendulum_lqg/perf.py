@@ -93,22 +93,39 @@ def raw_rollout_rate(plant: object, episodes: int, nstep: int, nthread: int, *,
 
 
 def raw_batch_rate(plant: object, episodes: int, nstep: int, nthread: int, *,
-                   calls: int = 1) -> float:
+                   calls: int = 1, gap: float = 0.0) -> float:
     """Physics steps per second of ``calls`` calls of ``mujoco.batch.Batch.step(nstep)`` on
     ``episodes`` simulations (θ₀ = 0.1, the force written before each call, nothing recorded):
     bare physics that returns to Python every ``nstep`` steps, as a vector env must once per
-    control period (the same MuJoCo batch the simulation core steps)."""
+    control period (the same MuJoCo batch the simulation core steps).
+
+    ``gap`` > 0: the calling thread spins that many seconds of Python before each call (not
+    timed), as an env and its agent run Python between steps. The batch's other threads wait
+    for the next call spinning only briefly, then sleep, and a sleeping thread wakes late: the
+    physics of a step then takes longer than back to back, with no other work in the way."""
     from mujoco.batch import Batch
 
     m = plant.model  # type: ignore[attr-defined]
     batch = Batch(m, episodes, nthread=max(1, nthread))
     batch.qpos[:, plant.qpos_index[1]] = 0.1  # type: ignore[attr-defined]
     ctrl = batch.ctrl
-    t = time.perf_counter()
+    clock = time.perf_counter
+    if gap <= 0.0:
+        t = clock()
+        for _ in range(calls):
+            ctrl[:] = 0.0
+            batch.step(nstep=nstep)
+        return calls * episodes * nstep / (clock() - t)
+    spent = 0.0
     for _ in range(calls):
+        until = clock() + gap
+        while clock() < until:
+            pass
+        t = clock()
         ctrl[:] = 0.0
         batch.step(nstep=nstep)
-    return calls * episodes * nstep / (time.perf_counter() - t)
+        spent += clock() - t
+    return calls * episodes * nstep / spent
 
 
 def shard_idle(shard_seconds: list[tuple[float, float]]) -> float:

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import statistics
+import time
 
 import pytest
 
-from pendulum_lqg.perf import run_perf, shard_idle
+from pendulum_lqg.perf import raw_batch_rate, run_perf, shard_idle
 
 
 def test_perf_baseline_is_the_faster_bare_physics_and_the_ratio_the_median_of_pairs():
@@ -35,3 +36,12 @@ def test_shard_idle_is_the_thread_time_spent_waiting_for_the_last_shard():
     assert shard_idle([(0.0, 4.0), (0.0, 4.0), (0.0, 2.0)]) == pytest.approx(2 / 12)
     assert shard_idle([(0.0, 3.0)]) == 0.0 and shard_idle([]) == 0.0
 
+
+
+def test_raw_batch_rate_times_the_physics_only_not_the_python_gaps(plant):
+    """With 20 ms of Python spun before each of 3 calls, the run lasts over 60 ms, but the rate
+    counts only the calls' own time (4 simulations × 10 steps take well under 60 ms)."""
+    t = time.perf_counter()
+    rate = raw_batch_rate(plant, 4, 10, 1, calls=3, gap=0.02)
+    assert time.perf_counter() - t >= 0.06
+    assert 0 < 3 * 4 * 10 / rate < 0.02
