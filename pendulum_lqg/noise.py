@@ -213,12 +213,10 @@ class NoiseStream:
             self._pos[:] = self._cursor
             self._cursor = None
 
-    def _refill(self, r: int) -> None:
-        self._gens[r].standard_normal(out=self._unit)      # the episode's next CHUNK periods
-        np.multiply(self._unit, self._scale, out=self._block[:, r])
-
-    def _draw_ring(self, rows: list[int] | range, start: int, stop: int) -> None:
-        """Periods ``start … stop−1`` of ``rows`` into the ring (period q in slot q mod chunk)."""
+    def _draw(self, rows: list[int] | range, start: int, stop: int) -> None:
+        """Periods ``start … stop−1`` of each of ``rows`` into the block (period q in slot
+        q mod the block's periods: fixed blocks draw 0 … chunk−1, the ring wraps), scaled to
+        physical units, the rows taking :data:`DRAW_LOCK` together."""
         c = self._chunk
         m, a = stop - start, start % c
         unit = self._unit[:m]
@@ -238,7 +236,7 @@ class NoiseStream:
             raise PendulumLQGError(f"noise: period {p} drawn, past the horizon of {h} periods")
         groups = len(self._drawn)
         if p == 0:                                   # every episode's first periods
-            self._draw_ring(range(self.n), 0, groups)
+            self._draw(range(self.n), 0, groups)
             self._drawn = [groups] * groups
         g = p % groups
         drawn = self._drawn[g]
@@ -248,7 +246,7 @@ class NoiseStream:
         ahead = drawn - p
         if drawn < h and (ahead < groups or ahead <= c // 2):
             stop = min(p + c, h)
-            self._draw_ring(np.flatnonzero(self._group == g).tolist(), drawn, stop)
+            self._draw(np.flatnonzero(self._group == g).tolist(), drawn, stop)
             self._drawn[g] = stop
         self._period = p + 1
         z = self._block[p % c]
@@ -271,9 +269,7 @@ class NoiseStream:
         c = self._cursor
         if rows is None and c is not None:                # the whole batch in step
             if c == self._chunk:
-                with DRAW_LOCK:
-                    for r in range(self.n):
-                        self._refill(r)
+                self._draw(range(self.n), 0, c)
                 c = 0
             self._cursor = c + 1
             z = self._block[c]
@@ -284,10 +280,9 @@ class NoiseStream:
         pos = self._pos if every else self._pos[idx]
         due = pos >= self._chunk
         if np.count_nonzero(due):
-            with DRAW_LOCK:
-                for r in idx[due].tolist():
-                    self._refill(r)
-                    self._pos[r] = 0
+            refill = idx[due]
+            self._draw(refill.tolist(), 0, self._chunk)
+            self._pos[refill] = 0
             pos = self._pos if every else self._pos[idx]
         z = self._block[pos, idx]
         if every:
