@@ -15,6 +15,8 @@ is the ceiling: ``native / bare physics`` is the share of it the native env reac
 ``bare batch, … µs gaps`` makes the same ``Batch.step`` calls with ``--gap`` µs of Python spun
 before each (not timed): no vector env can avoid running Python between steps, and MuJoCo's
 threads, idle that long, go to sleep and wake late (a diagnostic, not the ceiling);
+``per vector step`` gives the time beyond bare physics that the native env spends in a step
+(its own Python, and the physics slowed by it) and what the target, 0.90× bare physics, allows;
 ``physics / sync`` is the ceiling of the native/sync ratio on this machine (with ``c`` cores it
 grows about like ``c``: the sync env uses one). In each round the contenders take turns block by
 block (``--blocks`` blocks of ``steps / blocks`` steps), so a slow spell of the machine hits all of
@@ -127,6 +129,13 @@ def main() -> None:
     print(f"{'native / physics with gaps':>28}: {np.median(to_gaps):.3f}   (rounds "
           f"{min(to_gaps):.3f}–{max(to_gaps):.3f}; with the gaps bare physics takes "
           f"{np.median(gap_cost):.3f}× as long)")
+    # the budget: per vector step, the time beyond bare physics that the target allows, and what
+    # the native env spends (per round, then medians)
+    bare_us = [n / r * 1e6 for r in rates["physics"]]
+    spent = [n / a * 1e6 - b for a, b in zip(rates["native"], bare_us, strict=True)]
+    print(f"{'per vector step':>28}: bare physics {np.median(bare_us):.0f} µs; the native env "
+          f"spends {np.median(spent):.0f} µs beyond it (rounds {min(spent):.0f}–{max(spent):.0f}), "
+          f"0.90 allows {np.median(bare_us) * (1 / 0.9 - 1):.0f} µs")
     print(f"{'native / sync':>28}: {np.median(to_sync):.1f}×   (ceiling bare physics / sync "
           f"{np.median(ceiling):.1f}×: no vector env can exceed it here)")
     native.close()
