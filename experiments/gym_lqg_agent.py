@@ -4,7 +4,7 @@ Episode ``k`` of a run seeded ``--seed`` is ``env.reset(seed=episode_seed(seed, 
 episode the benchmark runs — so the success rate and mean J printed here equal the benchmark's
 for the same configuration (lecture scenario: T = 10 ms, 10 s, x₀ = [0, 0.1, 0, 0], lecture noise,
 DLQR + steady-state Kalman filter). ``--check`` also runs the sim core directly
-(:func:`~pendulum_lqg.sim.run_episodes`, what ``bench`` calls) and compares episode by episode.
+(:func:`~pendulum_lqg.core.runner.run_episodes`, what ``bench`` calls) and compares episode by episode.
 
 Usage::
 
@@ -19,10 +19,10 @@ import gymnasium as gym
 import numpy as np
 
 import pendulum_lqg
-from pendulum_lqg.agent import LQGAgent
-from pendulum_lqg.metrics import mean_se, wilson_interval
+from pendulum_lqg.core.metrics import mean_se, wilson_interval
+from pendulum_lqg.core.seeding import episode_seed
+from pendulum_lqg.envs.agent import LQGAgent
 from pendulum_lqg.policy import OBSERVERS
-from pendulum_lqg.sim import episode_seed
 
 
 def main() -> None:
@@ -57,8 +57,8 @@ def main() -> None:
           f"{ok.mean():.1%} (95% CI {lo:.1%}–{hi:.1%}), mean J {j}")
 
     if args.check:
-        from pendulum_lqg.metrics import summarize
-        from pendulum_lqg.sim import run_episodes
+        from pendulum_lqg.core.metrics import summarize
+        from pendulum_lqg.core.runner import run_episodes
 
         base = env.unwrapped
         res = run_episodes(base.plant, base.scenario, LQGAgent(env, agent.spec).policy,

@@ -20,10 +20,11 @@ import argparse
 import time
 from pathlib import Path
 
+from pendulum_lqg.core.runner import run_episodes
+from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.plant import load_plant
 from pendulum_lqg.policy import DesignSpec, design_policy
 from pendulum_lqg.record import read_recording, record_episodes, verify_recording
-from pendulum_lqg.sim import Scenario, run_episodes
 
 SEED, EPISODE = 0, 0
 DOCS = Path(__file__).resolve().parent.parent / "docs"

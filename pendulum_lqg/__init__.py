@@ -26,10 +26,10 @@ import sys
 from pathlib import PurePath
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.3.4"
+__version__ = "0.4.0"
 __all__ = ["ENV_ID", "SCHEMA_VERSION", "PolicyContext", "__version__", "register_envs"]
 
-#: The Gymnasium id of the cart-pole LQG environment (:class:`pendulum_lqg.env.CartPoleLQGEnv`).
+#: The Gymnasium id of the cart-pole LQG environment (:class:`pendulum_lqg.envs.single.CartPoleLQGEnv`).
 ENV_ID = "pendulum_lqg/CartPoleLQG-v0"
 
 #: Version of the results schema (``summary.json``, ``episodes.csv``); see README "Results schema".
@@ -49,7 +49,7 @@ def register_envs() -> None:
     Called when the package is imported. A behaviour change of the environment gets a new version
     here (``-v1``), never an edit of v0.
 
-    The entry point :func:`pendulum_lqg.env.make_env` wraps the env in its own ``TimeLimit`` of
+    The entry point :func:`pendulum_lqg.envs.single.make_env` wraps the env in its own ``TimeLimit`` of
     ``duration / control_period`` steps, so ``max_episode_steps`` follows those keywords (a fixed
     registered value would cut a longer episode short); hence no ``max_episode_steps`` here.
     """
@@ -59,8 +59,8 @@ def register_envs() -> None:
         return
     gymnasium.register(
         id=ENV_ID,
-        entry_point="pendulum_lqg.env:make_env",
-        vector_entry_point="pendulum_lqg.env:CartPoleLQGVectorEnv",
+        entry_point="pendulum_lqg.envs.single:make_env",
+        vector_entry_point="pendulum_lqg.envs.vector:CartPoleLQGVectorEnv",
         kwargs={"duration": _DEFAULT_DURATION, "control_period": _DEFAULT_CONTROL_PERIOD},
     )
 

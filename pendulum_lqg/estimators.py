@@ -29,13 +29,12 @@ import numpy as np
 
 from pendulum_lqg.design.kalman import measurement_update
 from pendulum_lqg.errors import ShapeError
-from pendulum_lqg.metrics import einsum
 
 
 def mv(M: np.ndarray, X: np.ndarray) -> np.ndarray:
     """Row-wise ``M @ x`` for a batch ``X`` (n, j) → (n, i); bitwise independent of n
     (``np.einsum``'s C function, without its Python wrapper)."""
-    return einsum("ij,nj->ni", M, X)
+    return np.einsum("ij,nj->ni", M, X)
 
 
 def lost_rows(y: np.ndarray) -> np.ndarray | None:

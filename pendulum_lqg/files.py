@@ -1,6 +1,6 @@
 """Files that are never half-written, and the CSV form of episode rows.
 
-Kept apart from :mod:`pendulum_lqg.results` (which knows experiments) so that everything that
+Kept apart from :mod:`pendulum_lqg.bench.results` (which knows experiments) so that everything that
 writes files — sweeps, studies, reports — can use them without importing the experiment layer.
 """
 

@@ -46,10 +46,10 @@ import numpy as np
 from pendulum_lqg.errors import ConfigError, PluginError
 
 if TYPE_CHECKING:
-    from pendulum_lqg.noise import NoiseModel
+    from pendulum_lqg.core.noise import NoiseModel
+    from pendulum_lqg.core.scenario import Scenario
     from pendulum_lqg.plant import Plant
     from pendulum_lqg.policy import DesignSpec
-    from pendulum_lqg.sim import Scenario
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,7 +79,7 @@ class PolicyContext:
         Weights of the benchmark's cost ``J = ∫ xᵀQx + uᵀRu dt``.
     plant : pendulum_lqg.plant.Plant
         The nominal MuJoCo plant (advanced use: parameters, the compiled model).
-    noise : pendulum_lqg.noise.NoiseModel
+    noise : pendulum_lqg.core.noise.NoiseModel
         The nominal noise model (``W``/``V`` above come from it).
     G : (4, m)
         Input matrix of the process noise (I₄ for state noise, the generalised-force map for

@@ -36,6 +36,7 @@ from scipy.linalg import expm
 
 from pendulum_lqg import design
 from pendulum_lqg._config import config_vector
+from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.design._checks import as_poles
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.estimators import (
@@ -50,7 +51,6 @@ from pendulum_lqg.estimators import (
 )
 from pendulum_lqg.linearize import ContinuousModel, discretize_zoh, linearize
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS
-from pendulum_lqg.noise import NoiseModel
 from pendulum_lqg.plant import Plant, steps_per_period
 
 Controller = Literal["lqr", "dlqr"]
@@ -142,7 +142,7 @@ class Policy:
     name : "<controller>+<observer>"
     info : design data (gains, poles, matrices) for reports and recordings
     independent_rows : always True — each row (episode) evolves on its own, so the core may run
-        a batch as shards, each with a copy of the policy (:func:`~pendulum_lqg.sim.shard_count`)
+        a batch as shards, each with a copy of the policy (:func:`~pendulum_lqg.core.runner.shard_count`)
     """
 
     independent_rows: ClassVar[bool] = True
@@ -313,7 +313,7 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
 
 
 def delay_periods(scenario: object) -> tuple[int, int]:
-    """``(measurement, actuator)`` delays of a :class:`~pendulum_lqg.sim.Scenario` in periods —
+    """``(measurement, actuator)`` delays of a :class:`~pendulum_lqg.core.scenario.Scenario` in periods —
     what :func:`design_policy` takes as ``delays``."""
     return (int(getattr(scenario, "measurement_delay_periods", 0)),
             int(getattr(scenario, "actuator_delay_periods", 0)))

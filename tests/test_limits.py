@@ -10,8 +10,10 @@ import pytest
 
 from pendulum_lqg import limits
 from pendulum_lqg.cli import main
+from pendulum_lqg.core.loop import Simulator
+from pendulum_lqg.core.physics import _cpu_count
+from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.plant import load_plant
-from pendulum_lqg.sim import Scenario, Simulator, _cpu_count
 
 
 def _one_line_exit_2(capsys, argv, fragment):
@@ -69,7 +71,7 @@ def test_a_long_run_reports_progress_and_batching_changes_nothing(capsys, monkey
 
 def test_a_huge_grid_is_refused_before_validating_and_a_grid_compiles_its_model_once(
         tmp_path, capsys):
-    from pendulum_lqg import experiments
+    from pendulum_lqg.bench import experiments
 
     values = ", ".join(str(i / 1000) for i in range(1000))
     durations = ", ".join(str(1 + i / 1000) for i in range(1000))

@@ -10,15 +10,16 @@ import pytest
 from scipy.linalg import expm
 
 import pendulum_lqg
+from pendulum_lqg.bench.experiments import load_spec, parse_spec, run_unit
 from pendulum_lqg.cli import main
+from pendulum_lqg.core.metrics import summarize
+from pendulum_lqg.core.noise import NoiseModel
+from pendulum_lqg.core.runner import run_episodes
+from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.errors import PluginError
-from pendulum_lqg.experiments import load_spec, parse_spec, run_unit
-from pendulum_lqg.metrics import summarize
-from pendulum_lqg.noise import NoiseModel
 from pendulum_lqg.plant import load_plant
 from pendulum_lqg.plugins import PolicyContext, build_policy
 from pendulum_lqg.resources import data_dir
-from pendulum_lqg.sim import Scenario, run_episodes
 
 HERE = Path(__file__).parent
 PLUGINS = HERE / "plugins" / "lqg_plugins.py"

@@ -3,7 +3,7 @@
 An experiment file with ``study = "NAME"`` still has a ``[grid]`` (the configurations: policies,
 control periods, initial estimates …) and an optional ``[NAME]`` table of study parameters
 (:data:`STUDY_PARAMS`, with defaults). ``pendulum-lqg bench FILE`` calls :func:`run_study`, which
-writes into a :class:`~pendulum_lqg.results.ResultsDir`:
+writes into a :class:`~pendulum_lqg.bench.results.ResultsDir`:
 
 margins
     ``summary.json`` (every loop's margins, the plant zeros, the LTR sweeps), ``margins.csv`` (one
@@ -108,7 +108,7 @@ def parse_study_params(study: str, table: dict[str, object]) -> dict[str, object
 
 def run_study(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
               ) -> dict[str, object]:
-    """Run ``spec`` (an :class:`~pendulum_lqg.experiments.ExperimentSpec` with ``study``) into the
+    """Run ``spec`` (an :class:`~pendulum_lqg.bench.experiments.ExperimentSpec` with ``study``) into the
     prepared results folder ``out``; returns the summary written to ``summary.json``."""
     started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     t0 = time.perf_counter()

@@ -1,0 +1,456 @@
+"""Typed experiment specs (``experiments/*.toml``), sweeps split into work units, and results.
+
+An experiment file describes a grid::
+
+    name = "lecture"
+    description = "…"
+    episodes = 200          # per configuration
+    seed = 0
+    chunk = 250             # episodes per work unit (optional)
+
+    [scenario]              # fixed Scenario fields (see pendulum_lqg.core.scenario.Scenario)
+    duration = 10.0
+
+    [noise]                 # fixed NoiseModel fields (see pendulum_lqg.core.noise.NoiseModel)
+    process = "state"
+
+    [design]                # fixed DesignSpec fields (see pendulum_lqg.policy.DesignSpec)
+    R = 1.0
+
+    model_file = "my_cartpole.xml"   # optional: your own cart-pole MJCF (default the shipped one)
+
+    [model]                 # fixed overrides of the simulated plant (ModelOverrides)
+
+    [grid]                  # every key a list; the sweep is their Cartesian product
+    policy = ["dlqr+luenberger", "dlqr+kalman"]
+    noise_scale = [0.0, 1.0]
+
+Analysis studies (not plain grids) add ``study = "margins"`` or ``study = "roa"`` and a table of the
+same name with the study's parameters; ``pendulum-lqg bench`` hands them to
+:func:`pendulum_lqg.analysis.studies.run_study`.
+
+Grid keys: ``policy`` ("controller+observer", or a user's plugin "MODULE:ATTR" /
+"path/to/file.py:ATTR", relative to the experiment file's folder), ``controller``, ``observer``,
+``noise_scale``,
+``control_period``, ``duration``, ``theta0``, ``estimate0``, ``discretization``,
+``pole_mass_scale``, ``pole_length_scale``, ``cart_mass_scale``, ``measurement_delay``,
+``actuator_delay``, ``dropout``, ``actuator_tau``, and the pair ``delay`` [s] + ``delay_kind``
+(``"measurement"`` or ``"actuator"``: which delay ``delay`` sets — one sweep over both kinds). Unknown
+keys anywhere are an error that lists the known ones.
+
+Sensing and actuation in ``[scenario]`` (see :class:`pendulum_lqg.core.scenario.Scenario`):
+``measurement_delay``, ``actuator_delay`` [s, whole control periods], ``dropout`` (probability a
+sample is lost), ``actuator_tau`` [s], ``randomize = {pole_mass_scale = [0.8, 1.2], …}``.
+
+The sweep is a list of :class:`WorkUnit` (configuration × episode chunk): plain, JSON-serialisable and
+independent, so they can run in any order or on other machines; :func:`run_unit` runs one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+import itertools
+import json
+import math
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from pendulum_lqg._config import check_keys
+from pendulum_lqg.core.noise import NoiseModel
+from pendulum_lqg.errors import ConfigError, PendulumLQGError
+from pendulum_lqg.plant import ModelOverrides, Plant
+from pendulum_lqg.policy import CONTROLLERS, OBSERVERS, DesignSpec
+
+if TYPE_CHECKING:
+    from pendulum_lqg.core.scenario import Scenario
+
+TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "model_file", "scenario", "noise",
+            "design", "model", "grid", "study", "margins", "roa")
+#: Analysis studies that are not plain grids: ``study = "NAME"`` plus an optional ``[NAME]`` table of
+#: its parameters; the grid still defines the configurations the study runs on
+#: (see :mod:`pendulum_lqg.analysis.studies`).
+STUDIES = ("margins", "roa")
+GRID_KEYS = ("policy", "controller", "observer", "noise_scale", "control_period", "duration",
+             "theta0", "estimate0", "discretization", "pole_mass_scale", "pole_length_scale",
+             "cart_mass_scale", "measurement_delay", "actuator_delay", "dropout", "actuator_tau",
+             "delay", "delay_kind", "plant")
+#: Scenario fields of the sensing-and-actuation study (also grid keys).
+SENSING_KEYS = ("measurement_delay", "actuator_delay", "dropout", "actuator_tau")
+DELAY_KINDS = ("measurement", "actuator")
+SCENARIO_KEYS = ("control_period", "duration", "x0", "x0_std", "estimate0", "theta_max",
+                 "settle_band", "cost_Q", "cost_R", *SENSING_KEYS, "randomize", "plant")
+NOISE_KEYS = tuple(f.name for f in dataclasses.fields(NoiseModel))
+DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
+MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))
+
+
+#: What an experiment name may look like: it names a folder under ``results/`` and files.
+NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,99}")
+
+
+def check_name(name: object) -> str:
+    """An experiment name fit to be a folder name: letters, digits and ``. _ + -``, starting with
+    a letter or digit, at most 100 characters (so never ``""``, ``..``, ``a/b`` or ``/abs``)."""
+    if not isinstance(name, str) or NAME_PATTERN.fullmatch(name) is None:
+        raise ConfigError(f"name: expected a plain name (letters, digits and . _ + -, starting "
+                          f"with a letter or digit, at most 100 characters), got {name!r}")
+    return name
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One point of the grid: everything needed to run its episodes.
+
+    ``values`` are the grid values that define it (for tables); ``scenario``/``noise``/``design``/
+    ``model`` are the resolved tables, as plain data; ``plugin`` names a user's policy (grid
+    ``policy = ["my_module:make"]``), which then replaces the built-in controller and observer.
+    """
+
+    index: int
+    values: dict[str, Any]
+    scenario: dict[str, Any]
+    noise: dict[str, Any]
+    design: dict[str, Any]
+    model: dict[str, Any]
+    #: a user's policy plugin (``MODULE:ATTR`` or an absolute ``file.py:ATTR``) instead of the
+    #: built-in ``design`` controller/observer
+    plugin: str | None = None
+    #: the cart-pole MJCF (absolute path) instead of the shipped ``cartpole.xml``
+    model_file: str | None = None
+
+    @property
+    def label(self) -> str:
+        return ", ".join(f"{k}={v}" for k, v in self.values.items()) or "default"
+
+    def build(self) -> tuple[Scenario, DesignSpec]:
+        """``(Scenario, DesignSpec)`` of this configuration (validated)."""
+        from pendulum_lqg.core.scenario import Scenario
+
+        noise = NoiseModel(**self.noise)
+        overrides = ModelOverrides.from_mapping(self.model)
+        scenario = Scenario(noise=noise, overrides=overrides, **self.scenario)
+        return scenario, DesignSpec(**self.design)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+    def plants(self, scenario: Scenario | None = None) -> tuple[Plant, Plant]:
+        """``(nominal, simulated)``: the model the designs believe in (the XML as it is) and the
+        one simulated (with the scenario's mismatch overrides; the same object when there are
+        none)."""
+        from pendulum_lqg.plant import load_plant
+
+        if scenario is None:
+            scenario, _ = self.build()
+        overrides = scenario.overrides
+        nominal = load_plant(self.model_file)
+        simulated = nominal if overrides.is_empty() else load_plant(self.model_file,
+                                                                    overrides=overrides)
+        return nominal, simulated
+
+    def validate(self) -> None:
+        """Build the configuration and check it against the (possibly overridden) model."""
+        from pendulum_lqg.plant import steps_per_period
+
+        scenario, _ = self.build()          # the Scenario checks the duration ceiling
+        steps_per_period(_simulated_plant(self.model_file, scenario.overrides),
+                         scenario.control_period)
+
+
+@functools.lru_cache(maxsize=32)
+def _simulated_plant(model_file: str | None, overrides: ModelOverrides) -> Plant:
+    """The plant a configuration simulates, compiled once per (file, overrides) while a grid is
+    validated (a grid over noise or policies shares one model)."""
+    from pendulum_lqg.plant import load_plant
+
+    return load_plant(model_file, overrides=overrides)
+
+
+@dataclass(frozen=True)
+class ExperimentSpec:
+    """A parsed, validated experiment file."""
+
+    name: str
+    description: str
+    episodes: int
+    seed: int
+    chunk: int
+    configurations: tuple[Configuration, ...]
+    source: dict[str, Any] = field(default_factory=dict)
+    study: str | None = None
+    study_params: dict[str, Any] = field(default_factory=dict)
+    #: folder of the experiment file (relative plugin paths), not part of the fingerprint
+    base_dir: Path | None = None
+
+    def with_overrides(self, *, episodes: int | None = None, seed: int | None = None,
+                       model_file: str | None = None) -> ExperimentSpec:
+        """The same experiment with ``--episodes`` / ``--seed`` / ``--model`` of the command line
+        (a model path given here is taken from the current folder)."""
+        if episodes is None and seed is None and model_file is None:
+            return self                     # nothing to change: no second validation
+        src = dict(self.source)
+        if episodes is not None:
+            src["episodes"] = episodes
+        if seed is not None:
+            src["seed"] = seed
+        if model_file is not None:
+            src["model_file"] = str(Path(model_file).resolve())
+        return parse_spec(src, name=self.name, base_dir=self.base_dir)
+
+    def units(self) -> list[WorkUnit]:
+        out = []
+        for cfg in self.configurations:
+            for start in range(0, self.episodes, self.chunk):
+                out.append(WorkUnit(config=cfg, seed=self.seed, start=start,
+                                    stop=min(self.episodes, start + self.chunk)))
+        return out
+
+    def fingerprint(self) -> str:
+        """Hash of the resolved spec (and of a custom model file's bytes): a resumed sweep must
+        have the same one."""
+        blob = json.dumps(self.source, sort_keys=True, default=str).encode()
+        model = self.configurations[0].model_file if self.configurations else None
+        if model is not None:
+            blob += Path(model).read_bytes()
+        return hashlib.sha256(blob).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class WorkUnit:
+    """An independent piece of a sweep: episodes ``[start, stop)`` of one configuration."""
+
+    config: Configuration
+    seed: int
+    start: int
+    stop: int
+
+    @property
+    def key(self) -> str:
+        return f"c{self.config.index:03d}_e{self.start:06d}-{self.stop:06d}"
+
+    def to_json(self) -> str:
+        """Plain JSON; the grid values keep their order (it is the column order of the rows)."""
+        return json.dumps(dataclasses.asdict(self))
+
+    @classmethod
+    def from_json(cls, text: str) -> WorkUnit:
+        d = json.loads(text)
+        return cls(config=Configuration(**d["config"]), seed=d["seed"], start=d["start"],
+                   stop=d["stop"])
+
+
+def _as_int(where: str, value: object, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+        raise ConfigError(f"{where}: expected an integer ≥ {minimum}, got {value!r}")
+    return value
+
+
+def _grid_point(values: dict[str, Any], base: dict[str, dict[str, Any]],
+                base_dir: Path | None = None,
+                ) -> tuple[dict[str, dict[str, Any]], str | None]:
+    """The resolved tables of one grid point, and its plugin reference (``None``: built-in)."""
+    from pendulum_lqg.plugins import is_plugin_ref, load_factory, resolve_ref, split_builtin
+
+    tables = {k: dict(v) for k, v in base.items()}
+    plugin = None
+    for key, value in values.items():
+        if key == "policy":
+            if is_plugin_ref(value):
+                load_factory(value, base_dir=base_dir)   # importable now, not mid-sweep
+                plugin = resolve_ref(value, base_dir)
+                continue
+            try:
+                ctrl, obs = split_builtin(value)
+            except ConfigError:
+                raise ConfigError(f"grid.policy: expected 'controller+observer' (e.g. "
+                                  f"'dlqr+kalman') or a plugin 'MODULE:ATTR' / "
+                                  f"'path/to/file.py:ATTR', got {value!r}") from None
+            tables["design"]["controller"], tables["design"]["observer"] = ctrl, obs
+        elif key in ("controller", "observer", "discretization"):
+            tables["design"][key] = value
+        elif key == "noise_scale":
+            tables["noise"]["scale"] = value
+        elif key in ("control_period", "duration", "estimate0", "plant", *SENSING_KEYS):
+            tables["scenario"][key] = value
+        elif key == "delay_kind":
+            continue                                     # with ``delay`` below
+        elif key == "delay":
+            kind = values["delay_kind"]
+            if kind not in DELAY_KINDS:
+                raise ConfigError(f"grid.delay_kind: expected 'measurement' or 'actuator', got "
+                                  f"{kind!r}")
+            tables["scenario"][f"{kind}_delay"] = value
+        elif key == "theta0":
+            x0 = list(tables["scenario"].get("x0", (0.0, 0.1, 0.0, 0.0)))
+            x0[1] = value
+            tables["scenario"]["x0"] = x0
+        else:  # model scales
+            tables["model"][key] = value
+    return tables, plugin
+
+
+def _model_file(value: object, base_dir: Path | None) -> str | None:
+    """``model_file`` as an absolute path (relative to the experiment file's folder, else the
+    current folder), checked to exist."""
+    if value is None:
+        return None
+    if not isinstance(value, str) or not value:
+        raise ConfigError(f"model_file: expected a path to an MJCF file, got {value!r}")
+    path = Path(value).expanduser()
+    if not path.is_absolute():
+        near = base_dir / path if base_dir is not None else None
+        path = near if near is not None and near.is_file() else Path.cwd() / path
+    if not path.is_file():
+        raise ConfigError(f"model_file: no file {value!r}")
+    return str(path.resolve())
+
+
+def _located(exc: PendulumLQGError, base: dict[str, dict[str, Any]],
+             values: dict[str, Any]) -> PendulumLQGError:
+    """``exc`` with the TOML location of its parameter: ``R: …`` → ``design.R: …`` when the key
+    was given in ``[design]`` (and not by the grid), plus the grid point that failed."""
+    msg = str(exc)
+    name = msg.split(":", 1)[0]
+    if name not in values:
+        for table, entries in base.items():
+            if name in entries:
+                msg = f"{table}.{msg}"
+                break
+    if values:
+        msg += " (grid point " + ", ".join(f"{k}={v!r}" for k, v in values.items()) + ")"
+    return type(exc)(msg)
+
+
+def parse_spec(data: dict[str, Any], *, name: str = "experiment",
+               base_dir: Path | None = None) -> ExperimentSpec:
+    """Validate an experiment mapping (as read from TOML).
+
+    ``base_dir`` is the folder relative plugin files (``policy = ["my_ctrl.py:make"]``) are taken
+    from: the experiment file's own folder (then the current folder).
+    """
+    check_keys("experiment", data, TOP_KEYS)
+    for table, known in (("scenario", SCENARIO_KEYS), ("noise", NOISE_KEYS),
+                         ("design", DESIGN_KEYS), ("model", MODEL_KEYS)):
+        check_keys(table, data.get(table, {}), known)
+    base = {table: dict(data.get(table, {}))
+            for table in ("scenario", "noise", "design", "model")}
+    for key in ("name", "description"):
+        if key in data and not isinstance(data[key], str):
+            raise ConfigError(f"{key}: expected a string, got {data[key]!r}")
+    if "name" in data:
+        check_name(str(data["name"]))
+    grid = data.get("grid", {})
+    check_keys("grid", grid, GRID_KEYS)
+    for key, values in grid.items():
+        if not isinstance(values, list) or not values:
+            raise ConfigError(f"grid.{key}: expected a non-empty list, got {values!r}")
+    for key, values in grid.items():
+        if key == "controller":
+            bad = [v for v in values if v not in CONTROLLERS]
+        elif key == "observer":
+            bad = [v for v in values if v not in OBSERVERS]
+        else:
+            bad = []
+        if bad:
+            known = CONTROLLERS if key == "controller" else OBSERVERS
+            raise ConfigError(f"grid.{key}: unknown {bad[0]!r}; expected one of " + ", ".join(known))
+    if ("delay" in grid) != ("delay_kind" in grid):
+        raise ConfigError("grid.delay: give delay and delay_kind together (delay_kind = "
+                          "['measurement', 'actuator'] says which delay the values set)")
+    study = data.get("study")
+    study_params: dict[str, Any] = {}
+    if study is not None:
+        if study not in STUDIES:
+            raise ConfigError(f"study: unknown {study!r}; expected one of " + ", ".join(STUDIES))
+        from pendulum_lqg.analysis.studies import parse_study_params
+
+        study_params = parse_study_params(str(study), data.get(str(study), {}))
+    for other in STUDIES:
+        if other in data and other != study:
+            raise ConfigError(f"{other}: a [{other}] table needs study = {other!r}")
+    model_file = _model_file(data.get("model_file"), base_dir)
+    episodes = _as_int("episodes", data.get("episodes", 100), 1)
+    seed = _as_int("seed", data.get("seed", 0), 0)
+    chunk = _as_int("chunk", data.get("chunk", 250), 1)
+    keys = list(grid)
+    from pendulum_lqg.limits import MAX_CONFIGURATIONS, check_at_most
+
+    check_at_most("grid", math.prod(len(grid[k]) for k in keys), MAX_CONFIGURATIONS,
+                  "configurations, each validated before the first unit runs")
+    configs = []
+    combos = itertools.product(*[grid[k] for k in keys]) if keys else [()]
+    for i, combo in enumerate(combos):
+        values = dict(zip(keys, combo, strict=True))
+        try:
+            tables, plugin = _grid_point(values, base, base_dir)
+            cfg = Configuration(index=i, values=values, plugin=plugin, model_file=model_file,
+                                **tables)
+            cfg.validate()  # every configuration now, not in the middle of a sweep
+        except PendulumLQGError as exc:
+            raise _located(exc, base, values) from exc
+        configs.append(cfg)
+    return ExperimentSpec(name=str(data.get("name", name)), description=str(
+        data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,
+        configurations=tuple(configs), source=dict(data),
+        study=None if study is None else str(study), study_params=study_params, base_dir=base_dir)
+
+
+def load_spec(name_or_path: str) -> ExperimentSpec:
+    """Load a shipped experiment by name (``lecture``) or a TOML file by path.
+
+    A bare name (no suffix, no folder) is looked up among the shipped experiments first, then as
+    ``NAME.toml`` in the current folder; anything else is a path.
+    """
+    from pendulum_lqg.resources import experiment_names, experiment_path
+
+    path = Path(name_or_path)
+    if not path.suffix and len(path.parts) == 1:
+        shipped = experiment_path(name_or_path)
+        if shipped is not None:
+            path = shipped
+        elif Path(f"{name_or_path}.toml").is_file():
+            path = Path(f"{name_or_path}.toml")
+    if not path.is_file():
+        raise ConfigError(f"experiment: no file {name_or_path!r}; known experiments: "
+                          + ", ".join(experiment_names()))
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"experiment: {path} is not UTF-8 text (TOML must be): byte "
+                          f"{exc.object[exc.start]:#04x} at offset {exc.start}") from exc
+    except OSError as exc:
+        raise ConfigError(f"experiment: cannot read {path}: {exc.strerror or exc}") from exc
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"experiment: {path} is not valid TOML: "
+                          f"{' '.join(str(exc).split())}") from exc
+    try:
+        return parse_spec(data, name=path.stem, base_dir=path.resolve().parent)
+    except PendulumLQGError as exc:       # every message names the file it came from
+        raise type(exc)(f"{exc} (in {path})") from exc
+
+
+def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, Any]]:
+    """Run one work unit; rows carry the configuration's grid values and index."""
+    from pendulum_lqg.core.runner import run_episodes
+    from pendulum_lqg.plugins import build_policy
+
+    scenario, spec = unit.config.build()
+    nominal, simulated = unit.config.plants(scenario)
+    policy = build_policy(unit.config.plugin, plant=nominal, scenario=scenario, spec=spec)
+    res = run_episodes(simulated, scenario, policy, seed=unit.seed,
+                       episodes=range(unit.start, unit.stop), nthread=nthread)
+    out = []
+    for row in res.rows:
+        out.append({"config": unit.config.index, **_flat(unit.config.values), **row})
+    return out
+
+
+def _flat(values: dict[str, Any]) -> dict[str, Any]:
+    return {k: (json.dumps(v) if isinstance(v, list | dict) else v) for k, v in values.items()}

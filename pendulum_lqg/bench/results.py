@@ -1,0 +1,324 @@
+"""Results on disk: written incrementally and atomically, resumable, never silently overwritten.
+
+Layout of a results folder::
+
+    spec.json        the resolved experiment (with its fingerprint) and the versions of
+                     pendulum_lqg and the libraries that compute the numbers; its presence marks
+                     the folder as ours (``--force`` empties no other folder)
+    units/KEY.csv    one file per finished work unit (written to a temp file, then renamed)
+    units/KEY.json   the unit's check record: fingerprint, configuration, episode range, row
+                     count, columns and the SHA-256 of the CSV's bytes — a resume trusts a unit
+                     only if all of them match (otherwise it is recomputed, or refused)
+    episodes.csv     every episode row with its configuration (assembled at the end); first
+                     column ``schema_version``
+    summary.json     aggregates per configuration (success rate + Wilson CI, mean ± SE), with
+                     ``schema_version`` (README "Results schema")
+    summary.md       the same as a Markdown table
+    meta.json        timestamps and machine facts (kept apart so the data files are byte-identical
+                     for the same seed)
+    .lock            present while a run writes into the folder
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import os
+import shutil
+import time
+from collections.abc import Callable
+from importlib import metadata
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from pendulum_lqg import SCHEMA_VERSION, __version__
+from pendulum_lqg.bench.experiments import check_name
+from pendulum_lqg.core.metrics import EPISODE_FIELDS, summarize
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.files import atomic_write, read_csv, rows_to_csv
+
+if TYPE_CHECKING:
+    from pendulum_lqg.bench.experiments import ExperimentSpec, WorkUnit
+
+__all__ = ["ResultsDir", "atomic_write", "check_name", "markdown_table", "read_csv",
+           "rows_to_csv", "summarize_configs", "unit_columns", "versions"]
+
+#: Libraries whose versions change the numbers; a resume across a change of any is refused.
+VERSIONED = ("mujoco", "numpy", "scipy", "control")
+
+
+def versions() -> dict[str, str]:
+    """pendulum_lqg's version and those of :data:`VERSIONED` (read from package metadata, nothing
+    imported)."""
+    out = {"pendulum_lqg": __version__}
+    for lib in VERSIONED:
+        try:
+            out[lib] = metadata.version(lib)
+        except metadata.PackageNotFoundError:
+            out[lib] = "absent"
+    return out
+
+
+def _protected(path: Path) -> str | None:
+    """Why ``--force`` must never empty ``path`` (``None`` if it may): the current folder or one
+    of its parents, the home folder, the filesystem root."""
+    real = path.resolve()
+    cwd = Path.cwd().resolve()
+    if real == cwd or real in cwd.parents:
+        return "it is the current folder or one of its parents"
+    if real == Path.home().resolve():
+        return "it is the home folder"
+    if real == Path(real.anchor):
+        return "it is the filesystem root"
+    return None
+
+
+class ResultsDir:
+    """A results folder for one experiment; see the module docstring for its layout."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.units_dir = self.path / "units"
+        self.lock = self.path / ".lock"
+        self._locked = False
+        self._fingerprint: str | None = None       # set by prepare(); enters the check records
+
+    def prepare(self, spec: ExperimentSpec, *, force: bool = False, resume: bool = False,
+                allow_version_change: bool = False) -> None:
+        """Create or reopen the folder; refuse to clobber results unless ``force``.
+
+        ``force`` empties the folder only if it is ours (it holds our ``spec.json``, or nothing)
+        and is not the current folder, a parent of it, the home folder or the root. ``resume``
+        refuses a folder written for another experiment or by other versions of pendulum_lqg or
+        its numeric libraries (unless ``allow_version_change``).
+        """
+        if force and resume:
+            raise ConfigError("--force and --resume: choose one (overwrite or complete)")
+        check_name(spec.name)
+        if self.path.exists() and not self.path.is_dir():
+            raise ConfigError(f"out: {self.path} is a file; expected a folder path (it is created "
+                              "if missing)")
+        has_results = self.path.exists() and any(self.path.iterdir())
+        if has_results and not (force or resume):
+            raise ConfigError(f"out: {self.path} already holds results; pass --force to overwrite "
+                              "it or --resume to complete an interrupted sweep")
+        spec_file = self.path / "spec.json"
+        old = self._read_spec() if has_results else None
+        if has_results and force:
+            why = _protected(self.path) or (None if old is not None else
+                                            "it holds no pendulum_lqg spec.json")
+            if why is not None:
+                raise ConfigError(f"--force: refusing to empty {self.path}: {why}; give --out a "
+                                  "results folder of its own")
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+            self._acquire()
+        except PermissionError as exc:
+            raise ConfigError(f"out: cannot write into {self.path} ({exc.strerror})") from None
+        record: dict[str, Any] = {"fingerprint": spec.fingerprint(), "name": spec.name,
+                                  "spec": spec.source, "versions": versions()}
+        if resume and old is not None:
+            problem = None
+            if old.get("fingerprint") != record["fingerprint"]:
+                problem = (f"holds a different experiment ({old.get('name')}, fingerprint "
+                           f"{old.get('fingerprint')}); use the same file, --episodes and --seed, "
+                           "or --force")
+            elif old.get("versions", {}) != record["versions"] and not allow_version_change:
+                problem = (f"was written by {_describe(old.get('versions', {}))}, this is "
+                           f"{_describe(record['versions'])}; finish it with the same versions, "
+                           "or pass --allow-version-change to mix them, or --force")
+            if problem is not None:
+                self.release()
+                raise ConfigError(f"--resume: {self.path} {problem}")
+        if force:
+            for child in self.path.iterdir():
+                if child == self.lock:
+                    continue
+                shutil.rmtree(child) if child.is_dir() else child.unlink()
+        self.units_dir.mkdir(exist_ok=True)
+        self._fingerprint = record["fingerprint"]
+        atomic_write(spec_file, json.dumps(record, indent=2, sort_keys=True, default=str) + "\n")
+
+    def _read_spec(self) -> dict[str, Any] | None:
+        """Our ``spec.json`` as a dict, or ``None`` if missing or not ours."""
+        try:
+            data = json.loads((self.path / "spec.json").read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return None
+        return data if isinstance(data, dict) and "fingerprint" in data else None
+
+    def _acquire(self) -> None:
+        try:
+            fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+        except FileExistsError:
+            pid = self.lock.read_text().strip() if self.lock.exists() else "?"
+            alive = pid.isdigit() and _pid_alive(int(pid))
+            if alive:
+                raise ConfigError(f"out: {self.path} is being written by another run (pid {pid})"
+                                  ) from None
+            self.lock.unlink(missing_ok=True)   # stale lock of a killed run
+            fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+        os.write(fd, str(os.getpid()).encode())
+        os.close(fd)
+        self._locked = True
+
+    def release(self) -> None:
+        if self._locked:
+            self.lock.unlink(missing_ok=True)
+            self._locked = False
+
+    def holds_complete(self, spec: ExperimentSpec) -> bool:
+        """The folder holds this very experiment's finished results (same fingerprint, every work
+        unit verified and the summary written)."""
+        old = self._read_spec() if (self.path / "summary.json").is_file() else None
+        return (old is not None and old.get("fingerprint") == spec.fingerprint()
+                and {u.key for u in spec.units()} <= self.verified(spec))
+
+    def done(self) -> set[str]:
+        """Keys of the unit files present (unverified; see :meth:`verified`)."""
+        if not self.units_dir.exists():
+            return set()
+        return {p.stem for p in self.units_dir.glob("*.csv")}
+
+    def verified(self, spec: ExperimentSpec,
+                 on_mismatch: Callable[[str, str], None] | None = None) -> set[str]:
+        """Keys of the units whose files match their check record and ``spec`` (fingerprint,
+        configuration, episode range, row count, columns, SHA-256). Each unit on disk that does
+        not is reported to ``on_mismatch(key, reason)`` and left out (so it is recomputed)."""
+        present = self.done()
+        fingerprint = spec.fingerprint()
+        ok = set()
+        for unit in spec.units():
+            if unit.key not in present:
+                continue
+            reason = self._check_unit(unit, fingerprint)
+            if reason is None:
+                ok.add(unit.key)
+            elif on_mismatch is not None:
+                on_mismatch(unit.key, reason)
+        return ok
+
+    def _check_unit(self, unit: WorkUnit, fingerprint: str) -> str | None:
+        csv_file = self.units_dir / f"{unit.key}.csv"
+        try:
+            data = csv_file.read_bytes()
+            record = json.loads((self.units_dir / f"{unit.key}.json").read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            return "no check record (written by an older version or cut short)"
+        except (OSError, ValueError) as exc:
+            return f"unreadable ({exc.__class__.__name__})"
+        if not isinstance(record, dict):
+            return "check record is not a JSON object"
+        actual = _unit_record(unit, fingerprint, data)
+        expected = {**actual, "rows": unit.stop - unit.start, "columns": unit_columns(unit)}
+        for field in ("rows", "columns"):
+            if actual[field] != expected[field]:
+                return f"{field}: found {actual[field]!r}, expected {expected[field]!r}"
+        if record.get("sha256") != actual["sha256"]:
+            return "its CSV was changed after it was written (SHA-256 differs)"
+        for field in ("fingerprint", "config", "start", "stop", "rows", "columns"):
+            if record.get(field) != expected[field]:
+                return f"{field}: recorded {record.get(field)!r}, expected {expected[field]!r}"
+        return None
+
+    def write_unit(self, unit: WorkUnit, rows: list[dict[str, Any]]) -> None:
+        """Write a unit's rows and then its check record (a unit without one is not trusted)."""
+        text = rows_to_csv(rows)
+        atomic_write(self.units_dir / f"{unit.key}.csv", text)
+        record = _unit_record(unit, self._fingerprint, text.encode("utf-8"))
+        atomic_write(self.units_dir / f"{unit.key}.json", json.dumps(record, sort_keys=True) + "\n")
+
+    def collect(self, spec: ExperimentSpec) -> list[dict[str, Any]]:
+        rows: list[dict[str, Any]] = []
+        for unit in spec.units():
+            f = self.units_dir / f"{unit.key}.csv"
+            if f.exists():
+                rows.extend(read_csv(f))
+        return rows
+
+    def finalize(self, spec: ExperimentSpec, meta: dict[str, Any]) -> dict[str, Any]:
+        """Assemble episodes.csv, summary.json, summary.md (and meta.json); return the summary."""
+        rows = self.collect(spec)
+        atomic_write(self.path / "episodes.csv",
+                     rows_to_csv([{"schema_version": SCHEMA_VERSION, **r} for r in rows]))
+        summary = summarize_configs(spec, rows)
+        atomic_write(self.path / "summary.json",
+                     json.dumps(summary, indent=2, sort_keys=True, default=str) + "\n")
+        atomic_write(self.path / "summary.md", markdown_table(spec, summary))
+        meta = {**meta, "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+        atomic_write(self.path / "meta.json", json.dumps(meta, indent=2, sort_keys=True) + "\n")
+        return summary
+
+
+def unit_columns(unit: WorkUnit) -> list[str]:
+    """The columns of a unit's CSV: ``config``, the grid keys, then the episode fields."""
+    return ["config", *unit.config.values, *EPISODE_FIELDS]
+
+
+def _unit_record(unit: WorkUnit, fingerprint: str | None, data: bytes) -> dict[str, Any]:
+    text = data.decode("utf-8", errors="replace")
+    lines = text.splitlines()
+    header = next(csv.reader(lines[:1]), []) if lines else []
+    return {"fingerprint": fingerprint, "config": unit.config.index, "start": unit.start,
+            "stop": unit.stop, "sha256": hashlib.sha256(data).hexdigest(),
+            "rows": max(len(lines) - 1, 0), "columns": header if lines else []}
+
+
+def _describe(v: dict[str, str]) -> str:
+    return ", ".join(f"{k} {v[k]}" for k in sorted(v)) or "unknown versions"
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def summarize_configs(spec: ExperimentSpec, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {"schema_version": SCHEMA_VERSION, "experiment": spec.name,
+                              "seed": spec.seed,
+                              "episodes_per_config": spec.episodes, "configurations": []}
+    for cfg in spec.configurations:
+        mine = [r for r in rows if r["config"] == cfg.index]
+        entry = {"index": cfg.index, "values": cfg.values, "label": cfg.label,
+                 "summary": summarize(mine) if mine else None}
+        out["configurations"].append(entry)
+    return out
+
+
+def _fmt(stat: dict[str, float], digits: int = 3) -> str:
+    mean, se = stat["mean"], stat["se"]
+    if mean != mean:  # nan
+        return "–"
+    if se != se or se <= 1e-9 * max(abs(mean), 1e-12):   # single value, or identical episodes
+        return f"{mean:.{digits}g}"
+    return f"{mean:.{digits}g} ± {se:.2g}"
+
+
+def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
+    """The summary as a Markdown table (one row per configuration)."""
+    configs = summary["configurations"]
+    keys = list(spec.configurations[0].values) if spec.configurations else []
+    head = [*keys, "success [95 % CI]", "J (successes)", "RMS θ [rad]", "max abs θ [rad]",
+            "RMS p [m]", "RMS u [N]", "saturated", "RMS θ̂−θ [rad]", "RMS ṗ̂−ṗ [m/s]",
+            "failures"]
+    lines = [f"**{spec.name}** — {spec.episodes} episodes per configuration, seed {spec.seed}",
+             "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for c in configs:
+        s = c["summary"]
+        if s is None:
+            continue
+        lo, hi = s["success_ci95"]
+        fails = ", ".join(f"{k} {v}" for k, v in sorted(s["failures"].items())) or "–"
+        cells = [str(c["values"][k]) for k in keys] + [
+            f"{s['success_rate']:.1%} [{lo:.1%}, {hi:.1%}]", _fmt(s["cost"]),
+            _fmt(s["rms_theta"]), _fmt(s["max_abs_theta"]), _fmt(s["rms_p"]), _fmt(s["rms_u"]),
+            f"{s['saturated_fraction']['mean']:.1%}", _fmt(s["rms_est_err_theta"]),
+            _fmt(s["rms_est_err_p_dot"]), fails]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,37 @@
+"""The ``pendulum-lqg`` command: ``design``, ``run``, ``bench``, ``perf``, ``report``.
+
+Modules: ``parser`` (the grammar and the arguments' conversions), ``design`` and ``commands`` (one
+function per subcommand). Only argument parsing and presentation live here; every computation is a
+library call. Heavy imports (numpy, MuJoCo, python-control, rich) happen inside the commands so
+``--help`` is instant. Bad input prints one line ``error: …`` naming the parameter and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+
+from pendulum_lqg.cli.commands import cmd_bench, cmd_perf, cmd_report, cmd_run
+from pendulum_lqg.cli.design import cmd_design
+from pendulum_lqg.cli.parser import EXIT_USAGE, build_parser
+
+COMMANDS = {"design": cmd_design, "run": cmd_run, "bench": cmd_bench, "perf": cmd_perf,
+            "report": cmd_report}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    from pendulum_lqg.errors import PendulumLQGError
+
+    try:
+        return COMMANDS[args.command](args)
+    except PendulumLQGError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except BrokenPipeError:  # e.g. `pendulum-lqg design --json | head`
+        return 0
+    except OSError as exc:   # a full disk, a read-only or vanished folder: files written stay
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"error: cannot write or read {where}{exc.strerror or exc}", file=sys.stderr)
+        return EXIT_USAGE

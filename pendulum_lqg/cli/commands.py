@@ -1,0 +1,277 @@
+"""``pendulum-lqg run``, ``bench``, ``report`` and ``perf``: each a function of the parsed arguments."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+from pendulum_lqg.cli.parser import DEFAULT_RECORDING, cfg_error, jsonable, noise_from_args, spec_from_args
+
+
+# ---- run -----------------------------------------------------------------------------------------
+def cmd_run(args: argparse.Namespace) -> int:
+    from pendulum_lqg.core.metrics import summarize
+    from pendulum_lqg.core.scenario import Scenario
+    from pendulum_lqg.limits import MAX_RECORDED_EPISODES, MAX_RUN_EPISODES, check_at_most
+    from pendulum_lqg.plant import Randomization, load_plant
+    from pendulum_lqg.plugins import build_policy, is_plugin_ref, split_builtin
+
+    if args.policy is not None and (args.controller or args.observer):
+        raise cfg_error("--policy: give either --policy or --controller/--observer, not both")
+    name = args.policy or f"{args.controller or 'dlqr'}+{args.observer or 'kalman'}"
+    plant = load_plant(args.model)
+    noise = noise_from_args(args, scale=args.noise_scale)
+    scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,
+                        x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0,
+                        plant=args.plant,
+                        measurement_delay=args.measurement_delay,
+                        actuator_delay=args.actuator_delay, dropout=args.dropout,
+                        actuator_tau=args.actuator_tau,
+                        randomize=Randomization.from_mapping(_randomize(args.randomize)))
+    plugin = is_plugin_ref(name)
+    spec = spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
+    policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)
+    recording = args.record is not None or args.spawn
+    check_at_most("--episodes", args.episodes, MAX_RUN_EPISODES,
+                  "run keeps every row in memory; bench streams larger studies to disk")
+    if recording:
+        check_at_most("--episodes", args.episodes, MAX_RECORDED_EPISODES,
+                      "episodes recorded with --record/--spawn, whose trajectories are kept")
+    res = _run_in_batches(plant, scenario, policy, args, trajectory=recording)
+    summary = summarize(res.rows)
+    config = {"policy": policy.name, "seed": args.seed, "episodes": args.episodes,
+              "backend": args.backend, "scenario": scenario.to_dict(),
+              "design": None if plugin else _dataclass_dict(spec), "model": str(plant.path)}
+    from pendulum_lqg import SCHEMA_VERSION
+
+    out = {"schema_version": SCHEMA_VERSION, "config": config,
+           "success_rate": summary["success_rate"],
+           "success_ci95": summary["success_ci95"], "summary": summary, "episodes": res.rows}
+    if recording:
+        from pendulum_lqg.record import record_episodes
+
+        path = args.record if args.record is not None else DEFAULT_RECORDING
+        stats = record_episodes(res.trajectories, plant=plant, scenario=scenario, policy=policy,
+                                config=config, path=path, spawn=args.spawn)
+        if stats.viewer_note:
+            print(f"viewer: {stats.viewer_note}; open the file with: rerun {path}",
+                  file=sys.stderr)
+        print(f"recording: {stats.path} ({stats.episodes} episode(s), {stats.bytes:,} bytes"
+              + (", streamed to the viewer" if stats.viewer_reached else "") + ")",
+              file=sys.stderr)
+    if args.json:
+        print(json.dumps(jsonable(out), indent=2))
+    else:
+        _print_summary(policy.name, config, summary)
+    return 0
+
+
+def _randomize(items: list[str] | None) -> dict[str, list[float]]:
+    """``--randomize KEY=LO:HI`` options as the ``randomize`` mapping of a Scenario."""
+    out: dict[str, list[float]] = {}
+    for item in items or []:
+        key, _, rng = item.partition("=")
+        lo, _, hi = rng.partition(":")
+        try:
+            out[key.strip()] = [float(lo), float(hi)]
+        except ValueError:
+            raise cfg_error(f"--randomize: expected KEY=LO:HI such as pole_mass_scale=0.8:1.2, "
+                             f"got {item!r}") from None
+    return out
+
+
+def _dataclass_dict(obj: Any) -> dict[str, Any]:
+    import dataclasses
+
+    return dataclasses.asdict(obj)
+
+
+def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    con = Console(highlight=False)
+    sc = config["scenario"]
+    lo, hi = s["success_ci95"]
+    con.print(escape(f"{name} — {s['episodes']} episodes, seed {config['seed']}, "
+                     f"T = {sc['control_period']} s, {sc['duration']} s, noise scale "
+                     f"{sc['noise']['scale']}, x0 = {list(sc['x0'])}"))
+    extras = {k: sc[k] for k in ("measurement_delay", "actuator_delay", "dropout", "actuator_tau",
+                                 "randomize") if sc.get(k)}
+    if extras:
+        con.print(escape("sensing and actuation: " + ", ".join(f"{k} = {v}"
+                                                                 for k, v in extras.items())))
+    con.print(f"success: {s['successes']}/{s['episodes']} = {s['success_rate']:.1%} "
+              f"(95 % Wilson CI {lo:.1%} – {hi:.1%})"
+              + escape(f"; failures: {s['failures']}" if s["failures"] else ""))
+    t = Table()
+    t.add_column("metric")
+    t.add_column("mean ± s.e.")
+    rows = [("cost", "J = ∫xᵀQx + uᵀRu dt (successes)", 1.0), ("rms_theta", "RMS θ [rad]", 1.0),
+            ("max_abs_theta", "max |θ| [rad]", 1.0), ("rms_p", "RMS p [m]", 1.0),
+            ("max_abs_p", "max |p| [m]", 1.0), ("rms_u", "RMS u [N]", 1.0),
+            ("max_abs_u", "max |u| [N]", 1.0),
+            ("saturated_fraction", "time saturated [% of the episode]", 100.0),
+            ("rms_est_err_p", "RMS p̂−p [m]", 1.0), ("rms_est_err_theta", "RMS θ̂−θ [rad]", 1.0),
+            ("rms_est_err_p_dot", "RMS ṗ̂−ṗ [m/s]", 1.0),
+            ("rms_est_err_theta_dot", "RMS θ̇̂−θ̇ [rad/s]", 1.0)]
+    # Under noise |θ| never stays inside the settling band, so the "last time outside it" is the
+    # episode's end: the settling time means something only for noise-free runs.
+    if sc["noise"]["scale"] == 0:
+        rows.append(("settling_time", f"settling time [s] (|θ| ≤ {sc['settle_band']:g} rad "
+                                      "from then on; successes)", 1.0))
+    rows.append(("time_to_failure", "time to failure [s] (failures)", 1.0))
+    for key, label, unit in rows:
+        m, se = s[key]["mean"] * unit, s[key]["se"] * unit
+        cell = "–" if m != m else (f"{m:.4g}" if se != se else f"{m:.4g} ± {se:.2g}")
+        t.add_row(escape(label), cell)
+    con.print(t)
+    if sc["noise"]["scale"] != 0:
+        con.print("settling time: not reported under noise (|θ| keeps leaving the "
+                  f"{sc['settle_band']:g} rad band); run with --noise-scale 0 for it")
+
+
+def _run_in_batches(plant: Any, scenario: Any, policy: Any, args: argparse.Namespace, *,
+                    trajectory: bool) -> Any:
+    """``run_episodes`` over ``--episodes`` in batches (memory flat in the episode count; the rows
+    do not depend on the batching), with a progress line on stderr every few seconds once a run
+    takes long."""
+    import time
+
+    from pendulum_lqg import limits
+    from pendulum_lqg.core.runner import BatchResult, run_episodes
+    from pendulum_lqg.plant import steps_per_period
+
+    steps = scenario.n_periods * steps_per_period(plant, scenario.control_period)
+    size = max(1, min(limits.RUN_BATCH, 20_000_000 // max(steps, 1)))    # ≤ ~2·10⁷ physics steps each
+    total = args.episodes
+    rows: list[dict[str, Any]] = []
+    trajectories: list[Any] | None = [] if trajectory else None
+    t0 = last = time.perf_counter()
+    for start in range(0, total, size):
+        res = run_episodes(plant, scenario, policy, seed=args.seed,
+                           episodes=range(start, min(start + size, total)), backend=args.backend,
+                           nthread=args.nthread, trajectory=trajectory)
+        rows += res.rows
+        if trajectories is not None:
+            trajectories += res.trajectories or []
+        now = time.perf_counter()
+        if len(rows) < total and now - last >= limits.PROGRESS_EVERY_S:
+            eta = (now - t0) / len(rows) * (total - len(rows))
+            print(f"run: {len(rows):,}/{total:,} episodes, {now - t0:.0f} s, about {eta:.0f} s "
+                  "left", file=sys.stderr)
+            last = now
+    return BatchResult(rows=rows, trajectories=trajectories)
+
+
+# ---- bench ---------------------------------------------------------------------------------------
+def cmd_bench(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from pendulum_lqg.bench.executors import make_executor
+    from pendulum_lqg.bench.experiments import load_spec
+    from pendulum_lqg.bench.results import ResultsDir
+    from pendulum_lqg.bench.sweep import SweepInterrupted, run_sweep
+
+    spec = load_spec(args.experiment).with_overrides(episodes=args.episodes, seed=args.seed,
+                                                     model_file=args.model)
+    out = ResultsDir(args.out or Path("results") / spec.name)
+    log = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
+    if spec.study is not None:
+        if args.executor != "local":
+            raise cfg_error(f"--executor: the {spec.study} study runs on the local executor")
+        out.prepare(spec, force=args.force, resume=args.resume,
+                    allow_version_change=args.allow_version_change)
+        return _bench_study(spec, out, args)
+    # `bench NAME --record DIR` after `bench NAME`: record from the finished results (nothing to
+    # rerun, so no --resume needed)
+    resume = args.resume or (args.record is not None and not args.force
+                             and out.holds_complete(spec))
+    executor = make_executor(args.executor, address=args.address, nthread=args.nthread)
+    try:
+        result = run_sweep(spec, out, executor=executor, resume=resume, force=args.force,
+                           progress=None if not args.quiet else False, log=log,
+                           record=args.record, nthread=args.nthread,
+                           on_mismatch=args.on_mismatch,
+                           allow_version_change=args.allow_version_change)
+    except SweepInterrupted as exc:
+        print(f"interrupted: {exc}; complete them with: {_resume_command(args, spec, out)}",
+              file=sys.stderr)
+        return 130
+    if not result.complete:
+        for failure in result.failures:
+            print(f"error: work unit {failure.key} failed: {failure.error}", file=sys.stderr)
+        print(f"incomplete: {len(result.failures)}/{result.units_total} work units failed; the "
+              f"others are saved in {out.path}; rerun the failed ones with: "
+              f"{_resume_command(args, spec, out)}", file=sys.stderr)
+        return 1
+    sys.stdout.write((out.path / "summary.md").read_text())
+    print(f"\nresults: {out.path}/episodes.csv, summary.md, summary.json", file=sys.stderr)
+    return 0
+
+
+def _resume_command(args: argparse.Namespace, spec: Any, out: Any) -> str:
+    """The command that completes this sweep (same file, episodes, seed, model, executor)."""
+    parts = ["pendulum-lqg bench", args.experiment, "--resume", "--out", str(out.path)]
+    if args.episodes:
+        parts += ["--episodes", str(spec.episodes)]
+    if args.seed is not None:
+        parts += ["--seed", str(spec.seed)]
+    if args.model:
+        parts += ["--model", args.model]
+    if args.executor != "local":
+        parts += ["--executor", args.executor] + (["--address", args.address]
+                                                  if args.address else [])
+    return " ".join(parts)
+
+
+def _bench_study(spec: Any, out: Any, args: argparse.Namespace) -> int:
+    """``bench`` of an analysis study (``study = "margins" | "roa"`` in the TOML)."""
+    from pendulum_lqg.analysis.studies import run_study
+    from pendulum_lqg.bench.sweep import terminate_as_interrupt
+
+    log = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
+    try:
+        with terminate_as_interrupt():
+            run_study(spec, out, nthread=args.nthread, log=log)
+    except KeyboardInterrupt:
+        print(f"interrupted: finished configurations are saved in {out.path}; complete them with: "
+              f"{_resume_command(args, spec, out)}", file=sys.stderr)
+        return 130
+    finally:
+        out.release()
+    sys.stdout.write((out.path / "summary.md").read_text())
+    print(f"\nresults: {out.path}/summary.md, summary.json", file=sys.stderr)
+    return 0
+
+
+# ---- report --------------------------------------------------------------------------------------
+def cmd_report(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from pendulum_lqg.analysis.report import make_report
+
+    paths = [Path(p) for p in args.results]
+    out = Path(args.out) if args.out else (paths[0] / "report" if len(paths) == 1
+                                           else Path("report"))
+    report = make_report(paths, out)
+    print(f"report: {report}", file=sys.stderr)
+    return 0
+
+
+# ---- perf ----------------------------------------------------------------------------------------
+def cmd_perf(args: argparse.Namespace) -> int:
+    from pendulum_lqg.bench.perf import run_perf
+
+    result = run_perf(episodes=args.episodes, duration=args.duration, nthread=args.nthread,
+                      repeats=args.repeats, memory=args.memory,
+                      log=lambda msg: print(msg, file=sys.stderr))
+    if args.json:
+        print(json.dumps(jsonable(result), indent=2))
+    else:
+        for line in result["report"]:
+            print(line)
+    return 0

@@ -1,0 +1,299 @@
+"""The command line's grammar and its conversions: every subcommand, its options, their one-line
+checks (exit 2), and the arguments turned into library objects."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import sys
+from collections.abc import Callable
+from typing import Any, NoReturn
+
+from pendulum_lqg import __version__
+from pendulum_lqg.names import CONTROLLERS, OBSERVERS, PLANTS
+
+EXIT_USAGE = 2
+
+
+#: The file ``run --spawn`` writes when no ``--record FILE`` is given.
+DEFAULT_RECORDING = "recording.rrd"
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors, and values that start with a minus sign taken as values.
+
+    ``--observer-poles -2,-3,-4,-5`` or ``--theta0 -0.1``: argparse's own rule treats only plain
+    negative numbers (``-2``) as values; here anything that starts with ``-`` followed by a digit
+    or a dot (comma lists, complex poles like ``-1+2j``) is a value too, since no option of the
+    command looks like that.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
+
+    def error(self, message: str) -> NoReturn:  # one line, status 2, no traceback
+        self.print_usage(sys.stderr)
+        print(f"error: {message}", file=sys.stderr)
+        raise SystemExit(EXIT_USAGE)
+
+
+def _floats(text: str) -> list[float]:
+    try:
+        vals = [float(t) for t in text.replace(" ", "").split(",") if t]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+    if not vals or not all(math.isfinite(v) for v in vals):
+        raise argparse.ArgumentTypeError(f"expected finite comma-separated numbers, got {text!r}")
+    return vals
+
+
+def _complexes(text: str) -> list[complex]:
+    try:
+        vals = [complex(t.replace("i", "j")) for t in text.replace(" ", "").split(",") if t]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated poles like -0.4,-0.5 or -1+2j,-1-2j, got {text!r}") from None
+    return vals
+
+
+def _int_at_least(minimum: int) -> Callable[[str], int]:
+    """argparse type: an integer ≥ ``minimum``."""
+    what = "a positive integer" if minimum == 1 else "a non-negative integer"
+
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            v = minimum - 1
+        if v < minimum:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+        return v
+
+    return parse
+
+
+_positive_int, _nonneg_int = _int_at_least(1), _int_at_least(0)
+
+
+def _number(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return v
+
+
+def _add_design_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("design")
+    g.add_argument("--model", default=None, metavar="XML",
+                   help="MJCF model file (default: the bundled models/cartpole.xml)")
+    g.add_argument("--dt", type=_number, default=0.01, metavar="T",
+                   help="control period T in seconds, a whole number (≤ 10 000) of the model's "
+                        "physics steps and at most 1 s (default 0.01)")
+    g.add_argument("--q", type=_floats, default=None, metavar="Q1,..,Q4",
+                   help="diagonal of the LQR state weight Q, units of [m⁻², rad⁻², (m/s)⁻², "
+                        "(rad/s)⁻²] (default 1,1,1,1)")
+    g.add_argument("--r", type=_number, default=None, help="LQR input weight R in N⁻² (default 1)")
+    g.add_argument("--observer-poles", type=_complexes, default=None, metavar="P1,..,P4",
+                   help="continuous-time Luenberger poles in rad/s, e.g. --observer-poles "
+                        "-2,-3,-4,-5 or -1+2j,-1-2j,-3,-4 (default -0.4,-0.5,-0.6,-0.7); "
+                        "discrete designs use z = exp(s·T)")
+    g.add_argument("--w", type=_floats, default=None, metavar="W",
+                   help="process-noise spectral density, diagonal: 4 values (m²·s, rad²·s, …) "
+                        "for state noise, 2 (N²·s, N²m²·s) for force noise (default the "
+                        "lecture's 4e-4 on every state)")
+    g.add_argument("--v", type=_floats, default=None, metavar="V",
+                   help="measurement-noise covariance per sample, diagonal (m², rad²; default "
+                        "0.01,0.01)")
+    g.add_argument("--process-noise", choices=("state", "force"), default="state",
+                   help="where process noise enters: the state (F = I₄, lecture) or generalised "
+                        "forces on slider and hinge (default state)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="pendulum-lqg",
+                     description="LQG control of a MuJoCo cart-pole under noise: designs, noisy "
+                                 "closed-loop runs and benchmarks. Negative numbers and lists are "
+                                 "given as they are: --observer-poles -2,-3,-4,-5.")
+    parser.add_argument("--version", action="version", version=f"pendulum-lqg {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("design", help="print the linearisation and every controller/observer design",
+                       description="Linearise the MuJoCo cart-pole about the upright and print "
+                                   "continuous/discrete LQR, Kalman and Luenberger designs.")
+    _add_design_options(p)
+    p.add_argument("--json", action="store_true",
+                   help="machine-readable output (matrices as nested lists, poles as [re, im])")
+
+    p = sub.add_parser("run", help="run seeded noisy episodes of one policy and summarise them",
+                       description="Run seeded episodes of one policy (built-in or your own "
+                                   "plugin) in the noisy MuJoCo loop and print their summary.")
+    p.add_argument("--policy", default=None, metavar="NAME",
+                   help="the policy: a built-in 'controller+observer' (e.g. dlqr+kalman) or your "
+                        "own plugin MODULE:ATTR or path/to/file.py:ATTR, a factory taking a "
+                        "pendulum_lqg.PolicyContext (README: Benchmark your own controller); "
+                        "default dlqr+kalman")
+    p.add_argument("--controller", choices=CONTROLLERS, default=None,
+                   help="built-in controller (default dlqr); not with --policy")
+    p.add_argument("--observer", choices=OBSERVERS, default=None,
+                   help="built-in observer (default kalman); not with --policy")
+    p.add_argument("--episodes", type=_positive_int, default=100,
+                   help="number of episodes (default 100)")
+    p.add_argument("--seed", type=_nonneg_int, default=0,
+                   help="the run's seed; episode k draws from episode_seed(seed, k) (default 0)")
+    p.add_argument("--duration", type=_number, default=10.0,
+                   help="episode length in s, at most 10⁸ control periods (default 10)")
+    p.add_argument("--noise-scale", type=_number, default=1.0,
+                   help="multiplies both noises' standard deviations (0 = noise-free; default 1); "
+                        "the estimators stay designed for the nominal noise")
+    p.add_argument("--theta0", type=_number, default=0.1,
+                   help="initial pole angle in rad, e.g. --theta0 -0.1 (default 0.1)")
+    p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
+                   help="initial estimate: x̂₀ = 0 or the true x₀ (default zero)")
+    p.add_argument("--plant", choices=PLANTS, default="mujoco",
+                   help="the simulated plant: MuJoCo, or the model's linearisation discretised "
+                        "exactly (linear-zoh) or by the lecture's forward Euler at the control "
+                        "period (linear-euler) (default mujoco)")
+    g = p.add_argument_group("sensing and actuation")
+    g.add_argument("--measurement-delay", type=_number, default=0.0, metavar="S",
+                   help="age of the measurement the policy receives, in s (a whole number of "
+                        "control periods; default 0)")
+    g.add_argument("--actuator-delay", type=_number, default=0.0, metavar="S",
+                   help="delay of the force, in s (a whole number of control periods; default 0)")
+    g.add_argument("--dropout", type=_number, default=0.0, metavar="P",
+                   help="probability that a measurement sample is lost (the policy gets nan; "
+                        "default 0)")
+    g.add_argument("--actuator-tau", type=_number, default=0.0, metavar="S",
+                   help="time constant of a first-order lag of the force, in s (default 0: none)")
+    g.add_argument("--randomize", action="append", default=None, metavar="KEY=LO:HI",
+                   help="per-episode uniform scale of a parameter of the simulated plant, e.g. "
+                        "pole_mass_scale=0.8:1.2 (repeatable; keys pole_mass_scale, "
+                        "pole_length_scale, cart_mass_scale; default: none)")
+    p.add_argument("--backend", choices=("rollout", "step"), default="rollout",
+                   help="batched MuJoCo (mujoco.batch) or a plain mj_step loop; bit-identical results "
+                        "(default rollout)")
+    p.add_argument("--nthread", type=_nonneg_int, default=None,
+                   help="physics threads (default: the CPU cores available, at most 8)")
+    p.add_argument("--record", metavar="FILE.rrd", default=None,
+                   help="write a Rerun recording of every episode to FILE.rrd (default: none)")
+    p.add_argument("--spawn", action="store_true",
+                   help="also stream the recording to a native Rerun viewer; the file is written "
+                        f"all the same (--record, default {DEFAULT_RECORDING}); without a display, "
+                        "or with no viewer listening within 5 s, only the file is written")
+    p.add_argument("--json", action="store_true",
+                   help="machine-readable output: configuration, summary and every episode row")
+    _add_design_options(p)
+
+    p = sub.add_parser("bench", help="run an experiment grid (experiments/*.toml)",
+                       description="Run an experiment: a grid of configurations × seeded episodes "
+                                   "(or an analysis study), written unit by unit into a results "
+                                   "folder and summarised. README: the experiment file format.")
+    p.add_argument("experiment",
+                   help="a shipped experiment (lecture, noise, plugins, …), NAME.toml in the "
+                        "current folder, or a path to a TOML file")
+    p.add_argument("--episodes", type=_positive_int, default=None,
+                   help="episodes per configuration (default: the file's)")
+    p.add_argument("--seed", type=_nonneg_int, default=None, help="seed (default: the file's)")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="results folder (default results/<name> under the current folder)")
+    p.add_argument("--model", default=None, metavar="XML",
+                   help="your own cart-pole MJCF (README: the model contract) instead of the "
+                        "experiment's model_file or the shipped models/cartpole.xml")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite the results already in --out (default: refuse)")
+    p.add_argument("--resume", action="store_true",
+                   help="complete an interrupted sweep in --out (same file, episodes and seed); "
+                        "every unit on disk is checked against its SHA-256, row count, columns "
+                        "and configuration first")
+    p.add_argument("--on-mismatch", choices=("recompute", "refuse"), default="recompute",
+                   help="with --resume: a unit file that fails its check is recomputed "
+                        "(default) or stops the run naming the unit")
+    p.add_argument("--allow-version-change", action="store_true",
+                   help="with --resume: complete results written by other versions of "
+                        "pendulum_lqg, mujoco, numpy, scipy or control (default: refuse)")
+    p.add_argument("--record", metavar="DIR", default=None,
+                   help="also record the worst/median/best/first-failing episode of each "
+                        "configuration into DIR (default: none)")
+    p.add_argument("--nthread", type=_nonneg_int, default=None,
+                   help="physics threads (default: the CPU cores available, at most 8)")
+    p.add_argument("--executor", choices=("local", "ray"), default="local",
+                   help="where work units run: this process (default) or Ray tasks (needs the "
+                        "extra: pip install 'pendulum-lqg[ray]'); results are byte-identical")
+    p.add_argument("--address", default=None, metavar="ADDR",
+                   help="with --executor ray: join the cluster at 'auto' or HOST:PORT (default: "
+                        "start a local Ray instance for the run)")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress bar or per-unit lines (the table is still printed)")
+
+    p = sub.add_parser("report", help="turn results folders into a Markdown report with PNG figures",
+                       description="Read results folders written by `pendulum-lqg bench` (grids and "
+                                   "the margins / roa studies) and write report.md with tables and "
+                                   "PNG figures.")
+    p.add_argument("results", nargs="+", metavar="RESULTS",
+                   help="results folders, or a folder holding several (e.g. results_small)")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="report folder (default: <RESULTS>/report for one folder argument, else "
+                        "report/)")
+
+    p = sub.add_parser("perf", help="throughput: closed loop vs bare MuJoCo physics, memory",
+                       description="Time the batched noisy DLQR + Kalman loop against bare "
+                                   "MuJoCo physics of the same batch (open-loop mujoco.rollout "
+                                   "and mujoco.batch calls, the faster as the baseline), "
+                                   "alternating, and optionally the peak memory of long benches.")
+    p.add_argument("--episodes", type=_positive_int, default=1024,
+                   help="episodes in the batch (default 1024)")
+    p.add_argument("--duration", type=_number, default=2.0,
+                   help="seconds simulated per episode (default 2)")
+    p.add_argument("--nthread", type=_nonneg_int, default=None,
+                   help="physics threads (default: the CPU cores available, at most 8)")
+    p.add_argument("--repeats", type=_positive_int, default=5,
+                   help="raw / closed-loop pairs, alternating; medians are compared (default 5)")
+    p.add_argument("--memory", action="store_true",
+                   help="also measure peak memory of 1000-episode benches of 2 s and 10 s")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    return parser
+
+
+# ---- helpers -------------------------------------------------------------------------------------
+def jsonable(obj: Any) -> Any:
+    from pendulum_lqg.jsonio import plain
+
+    return plain(obj)
+
+
+def noise_from_args(args: argparse.Namespace, scale: float = 1.0) -> Any:
+    from pendulum_lqg.core.noise import NoiseModel
+
+    kw: dict[str, Any] = {"process": args.process_noise, "scale": scale}
+    if args.w is not None:
+        kw["process_density"] = args.w
+    elif args.process_noise == "force":
+        raise cfg_error("--w: force noise needs its density (N²·s, N²m²·s), e.g. --w 0.01,0.001")
+    if args.v is not None:
+        kw["measurement_variance"] = args.v
+    return NoiseModel(**kw)
+
+
+def cfg_error(msg: str) -> Exception:
+    from pendulum_lqg.errors import ConfigError
+
+    return ConfigError(msg)
+
+
+def spec_from_args(args: argparse.Namespace, controller: str = "dlqr", observer: str = "kalman",
+                    ) -> Any:
+    """The built-in designs' options (weights, observer poles) from the command line."""
+    from pendulum_lqg.policy import DesignSpec
+
+    kw: dict[str, Any] = {"controller": controller, "observer": observer}
+    if args.q is not None:
+        kw["Q"] = tuple(args.q)
+    if args.r is not None:
+        kw["R"] = args.r
+    if args.observer_poles is not None:
+        kw["observer_poles"] = tuple(args.observer_poles)
+    return DesignSpec(**kw)

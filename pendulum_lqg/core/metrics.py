@@ -1,0 +1,276 @@
+"""Per-episode metrics streamed from the closed loop, and their aggregates.
+
+Definitions (all integrals use the physics step h and the state at the start of each step, up to and
+including the step in which the episode failed):
+
+* ``cost`` — ``J = ∫ xᵀQx + uᵀRu dt`` (no ½; the optimal-cost check compares with ``x₀ᵀPx₀``);
+* ``rms_*`` — ``sqrt(∫ s² dt / t_alive)``; ``max_abs_*`` — the largest magnitude seen, the
+  sample that crossed a failure limit included;
+* ``saturated_fraction`` — share of the alive time with ``|u|`` at the actuator limit;
+* ``rms_est_err_*`` — RMS over control samples of ``x̂[n] − x[n]`` (the estimate the controller used);
+* ``settling_time`` — the last time ``|θ|`` was above the scenario's ``settle_band`` (0 if never);
+* ``time_to_failure`` — time of the first failing physics step (``nan`` for a success).
+
+Aggregates: success rate with its 95 % Wilson score interval; mean ± standard error for the rest.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from pendulum_lqg.core.rules import FAIL_NONE, FAIL_REASONS, period_integrals
+
+EST_FIELDS = ("rms_est_err_p", "rms_est_err_theta", "rms_est_err_p_dot", "rms_est_err_theta_dot")
+
+#: Columns of one episode row, in order.
+EPISODE_FIELDS: tuple[str, ...] = (
+    "episode", "seed", "success", "failure_reason", "time_to_failure", "duration", "cost",
+    "rms_theta", "max_abs_theta", "rms_p", "max_abs_p", "rms_u", "max_abs_u",
+    "saturated_fraction", *EST_FIELDS, "settling_time",
+)
+
+
+def _update(ids: np.ndarray | slice, arr: np.ndarray, op: Any, v: Any) -> None:
+    """``arr[ids] = op(arr[ids], v)``, in place through a view when ``ids`` is a slice (``arr[ids]
+    += v`` would also write the view back onto itself)."""
+    view = arr[ids]
+    if isinstance(ids, slice):
+        op(view, v, out=view)
+    else:
+        arr[ids] = op(view, v)
+
+
+class MetricsAccumulator:
+    """Running sums per episode id; :meth:`rows` turns them into episode records.
+
+    Parameters
+    ----------
+    n : episode ids expected (``0 … n−1``; the arrays grow if a larger id starts)
+    h : physics step [s]; k : physics steps per control period
+    weights : (5,) ``h·[diag(Q), R]`` (see :func:`~pendulum_lqg.core.rules.period_integrals`)
+    u_max : actuator limit [N] (the saturated-time metric)
+    settle_band : the ``|θ|`` band of the settling time [rad]
+
+    ``ids`` given to :meth:`accumulate` may be an integer array or a ``slice`` (the batch's rows
+    are episodes ``start … stop−1`` in order: in-place sums, no gather and scatter).
+    """
+
+    _SUMS = ("alive", "cost", "theta2", "p2", "u2", "sat", "n_est", "settle",
+             "max_theta", "max_p", "max_u", "fail_time")
+    # the running sums (one entry per episode id), made by _alloc from _SUMS
+    alive: np.ndarray
+    cost: np.ndarray
+    theta2: np.ndarray
+    p2: np.ndarray
+    u2: np.ndarray
+    sat: np.ndarray
+    n_est: np.ndarray
+    settle: np.ndarray
+    max_theta: np.ndarray
+    max_p: np.ndarray
+    max_u: np.ndarray
+    fail_time: np.ndarray
+
+    def __init__(self, n: int, *, h: float, k: int, weights: np.ndarray, u_max: float,
+                 settle_band: float) -> None:
+        self.h, self.k = h, k
+        self.weights, self.u_max = weights, u_max
+        self.band = settle_band
+        self._steps = np.arange(1, k + 1)[:, None]      # (k, 1): 1 … k, the settling-time index
+        self._alloc(max(n, 1))
+
+    def _alloc(self, n: int) -> None:
+        self.size = n
+        for name in self._SUMS:
+            setattr(self, name, np.zeros(n))
+        self.est2 = np.zeros((n, 4))
+        self.reason = np.zeros(n, dtype=np.int8)
+        self.done = np.zeros(n, dtype=bool)
+        self.fail_time[:] = np.nan
+
+    def _grow(self, need: int) -> None:
+        if need <= self.size:
+            return
+        old = {name: getattr(self, name) for name in (*self._SUMS, "est2", "reason", "done")}
+        self._alloc(max(need, 2 * self.size))
+        for name, arr in old.items():
+            getattr(self, name)[: arr.shape[0]] = arr
+
+    def start(self, ids: np.ndarray, x0: np.ndarray) -> None:
+        self._grow(int(np.max(ids, initial=-1)) + 1)
+        self.restart(ids)
+
+    def restart(self, ids: np.ndarray) -> None:
+        self._grow(int(np.max(ids, initial=-1)) + 1)
+        for name in self._SUMS:
+            getattr(self, name)[ids] = 0.0
+        self.fail_time[ids] = np.nan
+        self.est2[ids] = 0.0
+        self.reason[ids] = FAIL_NONE
+        self.done[ids] = False
+
+    def accumulate(self, ids: np.ndarray | slice, z: np.ndarray, u: np.ndarray,
+                   x_hat: np.ndarray | None, failed: np.ndarray, reason: np.ndarray,
+                   fail_step: np.ndarray | None, t: np.ndarray,
+                   x_fail: np.ndarray | None = None) -> np.ndarray:
+        """Add one control period (``z``, ``fail_step``: see
+        :func:`~pendulum_lqg.core.rules.period_integrals`; ``u`` (n,)
+        the applied force; ``x_fail`` (n, 4) the state at the end of each row's failing step —
+        the sample that crossed the limit, counted in the ``max_abs_*`` metrics); returns the
+        period's cost per row."""
+        h = self.h
+        x_start = z[:, 0, :4]
+        z, t_alive, cost = period_integrals(z, fail_step, h=h, weights=self.weights)
+        _update(ids, self.cost, np.add, cost)
+        _update(ids, self.alive, np.add, t_alive)
+        theta, p = z[:, :, 1], z[:, :, 0]
+        _update(ids, self.theta2, np.add, h * np.einsum("nk,nk->n", theta, theta))
+        _update(ids, self.p2, np.add, h * np.einsum("nk,nk->n", p, p))
+        _update(ids, self.u2, np.add, u * u * t_alive)
+        _update(ids, self.sat, np.add, (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive)
+        # |p| and |θ| as (2, k, n), each component one contiguous block: the row maxima are then
+        # one reduction over the middle axis with long inner loops (on the (n, k) views numpy
+        # loops over k = 10 numbers at a time); a max is exact, so its order changes nothing
+        a = np.abs(z[:, :, :2].transpose(2, 1, 0), order="C")
+        row_max = a.max(axis=1)                                  # (2, n): max |p|, max |θ|
+        _update(ids, self.max_p, np.maximum, row_max[0])
+        _update(ids, self.max_theta, np.maximum, row_max[1])
+        _update(ids, self.max_u, np.maximum, np.abs(u))
+        # settling: the end of each row's last physics step with |θ| above the band. The alive
+        # part of z holds no nan (a nan state ends its episode at the step that made it), so a
+        # row's largest |θ| is above the band exactly when one of its steps is.
+        has = row_max[1] > self.band
+        if has.any():
+            # 1 + the index of each row's last step above the band (0: none), as an integer
+            last = np.multiply(a[1] > self.band, self._steps).max(axis=0)
+            settled = t + last * h
+            if isinstance(ids, slice):
+                np.copyto(self.settle[ids], settled, where=has)
+            else:
+                self.settle[ids[has]] = settled[has]
+        if x_hat is not None:
+            err = x_hat - x_start
+            with np.errstate(over="ignore", invalid="ignore"):     # a diverged row: inf is honest
+                np.multiply(err, err, out=err)
+                _update(ids, self.est2, np.add, err)
+            _update(ids, self.n_est, np.add, 1.0)
+        if fail_step is not None:
+            f = self._index(ids)[failed]
+            if x_fail is not None:          # the crossing sample (nan of a diverged row ignored)
+                self.max_theta[f] = np.fmax(self.max_theta[f], np.abs(x_fail[failed, 1]))
+                self.max_p[f] = np.fmax(self.max_p[f], np.abs(x_fail[failed, 0]))
+            self.fail_time[f] = t[failed] + (fail_step[failed] + 1) * h
+            self.reason[f] = reason[failed]
+            self.done[f] = True
+        return cost
+
+    @staticmethod
+    def _index(ids: np.ndarray | slice) -> np.ndarray:
+        return np.arange(ids.start, ids.stop) if isinstance(ids, slice) else ids
+
+    def rows(self, ids: np.ndarray, seeds: np.ndarray | None = None) -> list[dict[str, Any]]:
+        """Episode records (``EPISODE_FIELDS``) for the given ids.
+
+        Computed column by column over the ids (the same IEEE divisions and square roots as one
+        episode at a time, at a fraction of the per-number cost), then turned into dicts."""
+        ids = np.asarray(ids, dtype=np.int64)
+        raw_alive = self.alive[ids]
+        alive = np.where(raw_alive > 0, raw_alive, np.nan)
+        n_est = self.n_est[ids]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            est = np.sqrt(self.est2[ids] / n_est[:, None])
+            columns: dict[str, list[Any]] = {
+                "rms_theta": np.sqrt(self.theta2[ids] / alive).tolist(),
+                "rms_p": np.sqrt(self.p2[ids] / alive).tolist(),
+                "rms_u": np.sqrt(self.u2[ids] / alive).tolist(),
+                "saturated_fraction": (self.sat[ids] / alive).tolist(),
+            }
+        est[n_est <= 0] = np.nan
+        reason = self.reason[ids].tolist()
+        time_to_failure, duration = self.fail_time[ids].tolist(), raw_alive.tolist()
+        cost, settle = self.cost[ids].tolist(), self.settle[ids].tolist()
+        max_theta, max_p = self.max_theta[ids].tolist(), self.max_p[ids].tolist()
+        max_u = self.max_u[ids].tolist()
+        seed_list = [-1] * ids.size if seeds is None else np.asarray(seeds).tolist()
+        out: list[dict[str, Any]] = []
+        for i, e in enumerate(ids.tolist()):
+            row: dict[str, Any] = {
+                "episode": e,
+                "seed": int(seed_list[i]),
+                "success": reason[i] == FAIL_NONE,
+                "failure_reason": FAIL_REASONS[reason[i]],
+                "time_to_failure": time_to_failure[i],
+                "duration": duration[i],
+                "cost": cost[i],
+                "rms_theta": columns["rms_theta"][i],
+                "max_abs_theta": max_theta[i],
+                "rms_p": columns["rms_p"][i],
+                "max_abs_p": max_p[i],
+                "rms_u": columns["rms_u"][i],
+                "max_abs_u": max_u[i],
+                "saturated_fraction": columns["saturated_fraction"][i],
+                **dict(zip(EST_FIELDS, est[i].tolist(), strict=True)),
+                "settling_time": settle[i],
+            }
+            out.append(row)
+        return out
+
+
+def wilson_interval(successes: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """95 % Wilson score interval of a binomial proportion (Wilson 1927)."""
+    if n <= 0:
+        return (float("nan"), float("nan"))
+    p = successes / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def mean_se(values: np.ndarray) -> tuple[float, float]:
+    """Mean and standard error of the finite values (nan if there are none)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return (float("nan"), float("nan"))
+    se = float(v.std(ddof=1) / math.sqrt(v.size)) if v.size > 1 else float("nan")
+    return (float(v.mean()), se)
+
+
+SUMMARY_METRICS: tuple[str, ...] = (
+    "cost", "rms_theta", "max_abs_theta", "rms_p", "max_abs_p", "rms_u", "max_abs_u",
+    "saturated_fraction", *EST_FIELDS, "settling_time", "time_to_failure",
+)
+
+
+def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Aggregate episode rows: success rate with Wilson 95 % CI, mean ± SE of each metric.
+
+    ``cost`` and ``settling_time`` are averaged over the successful episodes only (a failed
+    episode's cost stops at the failure and would flatter it); the others over all episodes, and
+    ``time_to_failure`` over the failures.
+    """
+    n = len(rows)
+    succ = np.array([bool(r["success"]) for r in rows], dtype=bool)
+    s = int(succ.sum())
+    lo, hi = wilson_interval(s, n)
+    out: dict[str, Any] = {"episodes": n, "successes": s,
+                              "success_rate": s / n if n else float("nan"),
+                              "success_ci95": [lo, hi]}
+    reasons: dict[str, int] = {}
+    for r in rows:
+        if r["failure_reason"]:
+            reasons[str(r["failure_reason"])] = reasons.get(str(r["failure_reason"]), 0) + 1
+    out["failures"] = reasons
+    for name in SUMMARY_METRICS:
+        vals = np.array([float(r[name]) for r in rows], dtype=np.float64)
+        if name in ("cost", "settling_time"):
+            vals = vals[succ]
+        elif name == "time_to_failure":
+            vals = vals[~succ]
+        mean, se = mean_se(vals)
+        out[name] = {"mean": mean, "se": se}
+    return out

@@ -1,0 +1,62 @@
+"""The MJCF model's linearisation about the upright, stepped in numpy instead of MuJoCo."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from pendulum_lqg.errors import ConfigError
+
+if TYPE_CHECKING:
+    import mujoco
+
+    from pendulum_lqg.core.period import PeriodView
+    from pendulum_lqg.plant import Plant
+
+
+class LinearPhysics:
+    """The :class:`~pendulum_lqg.core.physics.base.Physics` of ``ẋ = A x + B u`` (``Scenario.plant``).
+
+    ``linear-zoh``: ``x ← Φ_h x + Γ_h u`` at every physics step h (the exact ZOH of ``ẋ = Ax + Bu``,
+    so the end of the period is exactly ``Φ_T x + Γ_T u``). ``linear-euler``: the lecture's update
+    ``x ← x + T·(A x + B u)`` once per control period; the k physics-step samples in between (which
+    the failure rule and the cost integrate over) lie on the straight line to it, the last one
+    exactly on it. State noise is added at the end of the period by the loop, as for MuJoCo; a
+    linear plant has no force noise, no actuator lag and no randomised models (the scenario refuses
+    them).
+    """
+
+    def __init__(self, plant: Plant, kind: str, k: int) -> None:
+        from pendulum_lqg.design import euler, zoh
+        from pendulum_lqg.linearize import linearize
+
+        lin = linearize(plant)
+        h = plant.timestep
+        self.kind, self.k = kind, k
+        if kind == "linear-zoh":
+            self.Phi, Gamma = zoh(lin.A, lin.B, h)
+        elif kind == "linear-euler":
+            self.Phi, Gamma = euler(lin.A, lin.B, k * h)       # I + TA, TB
+        else:
+            raise ConfigError(f"plant: expected 'linear-zoh' or 'linear-euler', got {kind!r}")
+        self.Gamma = Gamma[:, 0]
+        self._frac = (np.arange(1, k + 1) / k)[None, :, None]
+
+    def set_models(self, models: list[mujoco.MjModel]) -> None:
+        raise ConfigError("randomize: per-episode models need plant = 'mujoco'")
+
+    def advance(self, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None,
+                out: PeriodView) -> np.ndarray:
+        """See :meth:`Physics.advance <pendulum_lqg.core.physics.base.Physics.advance>`;
+        nothing resets."""
+        states = out.states
+        if self.kind == "linear-zoh":
+            for j in range(self.k):
+                x = np.einsum("ij,nj->ni", self.Phi, x) + u[:, None] * self.Gamma
+                states[:, j] = x
+        else:
+            x_end = np.einsum("ij,nj->ni", self.Phi, x) + u[:, None] * self.Gamma
+            states[...] = x[:, None, :] + self._frac * (x_end - x)[:, None, :]
+            states[:, -1] = x_end
+        return np.zeros(x.shape[0], dtype=bool)

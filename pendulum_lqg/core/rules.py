@@ -1,0 +1,191 @@
+"""The rules of a control period, each defined once.
+
+Every path that steps the plant — a batch of episodes, the single Gymnasium env (a one-row batch),
+the native vector env — applies these functions and no other copy of them:
+
+=====================  =======================================================================
+rule                   function
+=====================  =======================================================================
+saturation             :func:`saturate` — the requested force clipped to ``±u_max``
+                       (the actuator's ``ctrlrange``)
+non-finite force       :func:`nonfinite_forces` — a nan/inf request ends its episode as
+                       ``diverged`` (the physics runs 0 N for it)
+failure                :func:`failure_bounds` + :func:`all_inside` (the fast check) and
+                       :func:`detect_failure` (the full rule: which rows, why, at which step)
+period cost            :func:`period_integrals` / :func:`period_cost` — the rectangle rule of
+                       ``∫ xᵀ diag(Q) x + R u² dt`` at the physics step
+state noise            :func:`end_of_period` — the jump ``x ← x + δx`` at the end of the period
+=====================  =======================================================================
+
+The failure rule: an episode fails at the first physics step where ``|θ| > theta_max``, or the
+cart reaches the end of the track (``|p| ≥ track_limit``, the slider's ``range`` in the MJCF), or
+the state is not finite or runs away (``|x_i| > RUNAWAY``, or MuJoCo reset the data after an
+instability); the reason is ``pole_fell``, ``track_limit`` or ``diverged``. The end-of-period state
+(after the state noise) is checked for divergence too.
+
+The arrays these rules read are one control period of each row in the layout of
+:class:`~pendulum_lqg.core.period.PeriodBuffer`: ``(n, k+2, 5)`` rows of ``z = [p, θ, ṗ, θ̇, u]``
+at the start of the period, after each of the k physics steps, and at the end (after the state
+noise).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, overload
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from pendulum_lqg.core.period import PeriodView
+
+#: Any state component beyond this magnitude counts as divergence.
+RUNAWAY = 1e6
+
+FAIL_NONE, FAIL_POLE, FAIL_TRACK, FAIL_DIVERGED = 0, 1, 2, 3
+#: Failure codes (int8 in the arrays) and the names the results use.
+FAIL_REASONS: dict[int, str] = {FAIL_NONE: "", FAIL_POLE: "pole_fell", FAIL_TRACK: "track_limit",
+                                FAIL_DIVERGED: "diverged"}
+
+
+# ---- saturation ---------------------------------------------------------------------------------
+@overload
+def saturate(u: float, u_max: float) -> float: ...
+@overload
+def saturate(u: np.ndarray, u_max: float) -> np.ndarray: ...
+def saturate(u: np.ndarray | float, u_max: float) -> np.ndarray | float:
+    """The force the actuator can apply for a requested force ``u`` [N]: ``min(max(u, −u_max),
+    u_max)`` (the symmetric ``ctrlrange``). A float gives a float, an array a new array; the two
+    give the same numbers (a min and a max are exact)."""
+    if isinstance(u, float):
+        return min(max(u, -u_max), u_max)
+    return np.minimum(np.maximum(u, -u_max), u_max)
+
+
+def nonfinite_forces(u: np.ndarray) -> np.ndarray | None:
+    """The rows (bool mask) whose requested force is nan or ±inf, or ``None`` when every force is
+    finite (a finite sum has finite terms: one sum is the check in the common case)."""
+    if np.isfinite(u.sum()):
+        return None
+    bad = ~np.isfinite(u)
+    return bad if bad.any() else None
+
+
+# ---- failure ------------------------------------------------------------------------------------
+def failure_bounds(*, theta_max: float, track_limit: float, u_max: float) -> np.ndarray:
+    """The bounds ``[track, θ_max, RUNAWAY, RUNAWAY, 2·u_max]`` of one ``z`` row for the fast check
+    :func:`all_inside`: strictly inside them no part of the failure rule can fire (a saturated force
+    is inside; a nan is never inside)."""
+    return np.array([track_limit, theta_max, RUNAWAY, RUNAWAY, 2.0 * u_max])
+
+
+def all_inside(view: PeriodView) -> bool:
+    """The failure rule's fast check: every ``|z_i| < bound_i`` over the rows of ``view`` (start and
+    end states included — stricter than :func:`detect_failure`, which then finds nothing).
+
+    It runs on the rows flattened to one contiguous run of numbers with a bound per number
+    (``view.flat``, ``view.bounds``) and preallocated scratch, so the check makes no temporaries.
+    """
+    np.less(np.abs(view.flat, out=view.scratch), view.bounds, out=view.inside)
+    return bool(np.count_nonzero(view.inside) == view.inside.size)
+
+
+def detect_failure(view: PeriodView, reset: np.ndarray, *, theta_max: float, track_limit: float,
+                   bad_force: np.ndarray | None = None,
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Which rows of the period in ``view`` fail, why, and at which physics step.
+
+    Parameters
+    ----------
+    view : the period's rows (see the module docstring for the layout)
+    reset : (n,) bool, the rows MuJoCo reset after an instability (they diverged)
+    theta_max, track_limit : the failure limits [rad], [m]
+    bad_force : (n,) bool rows whose requested force was not finite (:func:`nonfinite_forces`):
+        they fail as ``diverged`` at step 0
+
+    Returns
+    -------
+    failed : (n,) bool; reason : (n,) int8 ``FAIL_*`` codes; fail_step : (n,) the first failing
+    physics step 0 … k−1 (``k`` for rows that did not fail), or ``None`` when no row failed
+    """
+    n, k = view.n, view.k
+    failed = np.zeros(n, dtype=bool)
+    reason = np.zeros(n, dtype=np.int8)                      # FAIL_NONE is 0
+    if n == 0 or (bad_force is None and np.count_nonzero(reset) == 0 and all_inside(view)):
+        return failed, reason, None
+    with np.errstate(invalid="ignore"):
+        mag = np.abs(view.states)                            # (n, k, 4) after each step
+        # ``not (|x| <= RUNAWAY)`` is true for nan, inf and runaway values alike
+        bad: np.ndarray = ~np.all(mag <= RUNAWAY, axis=2)
+        pole: np.ndarray = mag[:, :, 1] > theta_max
+        track: np.ndarray = mag[:, :, 0] >= track_limit
+        end_bad: np.ndarray = ~np.all(np.abs(view.end) <= RUNAWAY, axis=1)
+    bad[:, -1] |= end_bad | reset
+    if bad_force is not None:
+        bad[:, 0] |= bad_force
+    any_fail: np.ndarray = bad | pole | track
+    failed = np.any(any_fail, axis=1)
+    if not failed.any():
+        return failed, reason, None
+    fail_step = np.where(failed, np.argmax(any_fail, axis=1), k)
+    idx = np.nonzero(failed)[0]
+    s = fail_step[idx]
+    reason[idx] = np.where(bad[idx, s], FAIL_DIVERGED, np.where(pole[idx, s], FAIL_POLE, FAIL_TRACK))
+    return failed, reason, fail_step
+
+
+# ---- cost ---------------------------------------------------------------------------------------
+def cost_weights(cost_Q: tuple[float, ...], cost_R: float, h: float) -> np.ndarray:
+    """``h·[diag(Q), R]`` (5,): the weights of one physics step's ``z²`` in the period cost."""
+    return h * np.append(np.asarray(cost_Q, dtype=float), cost_R)
+
+
+def period_cost(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``Σ_j Σ_i weights_i · z[j, i]²`` per row of a period's (n, k, 5) ``z`` (nothing masked).
+
+    One ``einsum`` (no temporaries the size of ``z``); a row's result does not depend on the other
+    rows, so a batch and a single row give the same floats."""
+    return np.einsum("nki,nki,i->n", z, z, weights)
+
+
+def period_integrals(z: np.ndarray, fail_step: np.ndarray | None, *, h: float,
+                     weights: np.ndarray) -> tuple[np.ndarray, float | np.ndarray, np.ndarray]:
+    """The integrals of one control period — the one definition of the period's cost.
+
+    With ``z = [x, u]`` at the start of each physics step and ``weights = h·[diag(Q), R]``,
+    ``cost = Σ_j Σ_i weights_i · z[j, i]²``: the rectangle rule at the physics step h for
+    ``∫ xᵀQx + R u² dt``, up to and including the step in which the episode failed.
+
+    Parameters
+    ----------
+    z : (n, k, 5) ``[p, θ, ṗ, θ̇, u]`` at the start of each physics step: the period's initial
+        state, then the states after physics steps 1 … k−1; ``u`` the applied (saturated) force
+    fail_step : ``None`` if no row failed, else (n,) first failing physics step (``k`` if none)
+    h : physics step [s]; weights : (5,) ``h·[diag(Q), R]``
+
+    Returns
+    -------
+    z : (n, k, 5) the same, zeroed after a row's failing step;
+    t_alive : alive time in the period [s], a float (``k·h``) when no row failed, else (n,);
+    cost : (n,) ``∫ xᵀ diag(Q) x + R u² dt`` over the alive part of the period
+    """
+    k = z.shape[1]
+    t_alive: float | np.ndarray
+    if fail_step is None:
+        t_alive = k * h
+    else:
+        mask = np.arange(k)[None, :] <= fail_step[:, None]                 # (n, k)
+        t_alive = mask.sum(axis=1) * h
+        z = np.where(mask[:, :, None], z, 0.0)
+    return z, t_alive, period_cost(z, weights)
+
+
+# ---- state noise --------------------------------------------------------------------------------
+def end_of_period(view: PeriodView, w: np.ndarray | None) -> None:
+    """The state at the end of the period, ``view.end``: the state after the k-th physics step plus
+    the period's state-noise jump ``δx = w`` (``x ← x + δx``, drawn by
+    :class:`~pendulum_lqg.core.noise.NoiseStream` with covariance ``W·T``), or unchanged when the
+    process noise is off or enters as forces (``w = None``)."""
+    if w is None:
+        view.end[...] = view.last
+    else:
+        np.add(view.last, w, out=view.end)

@@ -1,0 +1,147 @@
+"""The control problem every policy faces: timing, noise, initial state, failure limits, cost.
+
+A :class:`Scenario` is validated once, when it is made; the loop, the runner and the envs take it
+as it is. It holds no physical parameter of the plant — those live in the MJCF model
+(:mod:`pendulum_lqg.plant`) — only what the experiment chooses.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from pendulum_lqg._config import config_vector, positive_number
+from pendulum_lqg.core.noise import NoiseModel
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.limits import MAX_DELAY_PERIODS, check_duration
+from pendulum_lqg.names import PLANTS
+from pendulum_lqg.plant import ModelOverrides, Randomization
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """The control problem every policy faces: timing, noise, initial state, failure rule, cost.
+
+    Attributes
+    ----------
+    control_period : T [s], an integer multiple of the model's physics step
+    duration : episode length [s] (rounded to whole control periods)
+    noise : process / measurement noise model (``noise.scale`` scales both std devs)
+    x0 : mean initial state ``[p, θ, ṗ, θ̇]``
+    x0_std : standard deviation of the initial state around ``x0`` (drawn per episode)
+    estimate0 : initial estimate, ``"zero"`` (x̂₀ = 0) or ``"true"`` (x̂₀ = x₀)
+    theta_max : failure when ``|θ|`` exceeds this [rad]
+    settle_band : settling time is the last time ``|θ|`` was above this band [rad]
+    cost_Q, cost_R : weights of ``J = ∫ xᵀ diag(Q) x + R u² dt``
+    overrides : model changes of the *simulated* plant (mismatch studies); designs use the
+        nominal model unless told otherwise
+    plant : how the plant is simulated — ``"mujoco"`` (default), or the MJCF model's
+        linearisation about the upright: ``"linear-zoh"`` (exact discretisation) or
+        ``"linear-euler"`` (the lecture's own ``x ← x + T·(A x + B u) + δx`` per control period);
+        same noise streams, failure rule, metrics and policies
+    measurement_delay : age of the measurement the policy receives [s], a whole number of control
+        periods ``d``: at sample n it gets the sample taken at n − d (NaN for n < d, when no
+        sample has arrived yet)
+    actuator_delay : delay of the force [s], a whole number of control periods ``d``: the force
+        requested at sample n acts over period n + d (0 N over the first d periods)
+    dropout : probability that a measurement sample is lost; the policy then receives
+        ``[nan, nan]`` for it (the built-in estimators run their prediction only)
+    actuator_tau : time constant of a first-order lag of the force [s] (0: none), at the physics
+        rate: over physics step j the actuator applies the lag's exact response at the end of
+        that step, ``f_j = u + (f_{j−1} − u)·e^{−h/τ}``
+    randomize : per-episode parameter randomisation of the simulated plant
+        (:class:`~pendulum_lqg.plant.Randomization`; a mapping such as
+        ``{"pole_mass_scale": (0.8, 1.2)}`` is accepted)
+    """
+
+    control_period: float = 0.01
+    duration: float = 10.0
+    noise: NoiseModel = field(default_factory=NoiseModel.lecture)
+    x0: tuple[float, ...] = (0.0, 0.1, 0.0, 0.0)
+    x0_std: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)
+    estimate0: Literal["zero", "true"] = "zero"
+    theta_max: float = 0.5
+    settle_band: float = 0.02
+    cost_Q: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
+    cost_R: float = 1.0
+    overrides: ModelOverrides = field(default_factory=ModelOverrides)
+    plant: str = "mujoco"
+    measurement_delay: float = 0.0
+    actuator_delay: float = 0.0
+    dropout: float = 0.0
+    actuator_tau: float = 0.0
+    randomize: Randomization = field(default_factory=Randomization)
+
+    def __post_init__(self) -> None:
+        for name in ("control_period", "duration", "theta_max", "settle_band", "cost_R"):
+            object.__setattr__(self, name, positive_number(name, getattr(self, name)))
+        check_duration(self.duration, self.control_period)     # at most MAX_PERIODS periods
+        object.__setattr__(self, "x0", config_vector("x0", self.x0, 4))
+        object.__setattr__(self, "x0_std", config_vector("x0_std", self.x0_std, 4, nonneg=True))
+        object.__setattr__(self, "cost_Q", config_vector("cost_Q", self.cost_Q, 4, nonneg=True))
+        if self.estimate0 not in ("zero", "true"):
+            raise ConfigError(f"estimate0: expected 'zero' or 'true', got {self.estimate0!r}")
+        if not isinstance(self.noise, NoiseModel):
+            raise ConfigError("noise: expected a NoiseModel")
+        if not isinstance(self.overrides, ModelOverrides):
+            raise ConfigError("overrides: expected a ModelOverrides")
+        self._check_sensing_and_actuation()
+        if self.plant not in PLANTS:
+            raise ConfigError(f"plant: expected one of {', '.join(PLANTS)}, got {self.plant!r}")
+        if self.plant != "mujoco" and self.noise.process == "force":
+            raise ConfigError(f"plant: {self.plant!r} takes process noise on the state (the "
+                              "lecture model); force noise needs plant = 'mujoco'")
+        if self.plant != "mujoco" and self.actuator_tau > 0:
+            raise ConfigError(f"actuator_tau: the lag acts at the physics rate, which the plant "
+                              f"{self.plant!r} does not have; use plant = 'mujoco'")
+        if self.plant != "mujoco" and not self.randomize.is_empty():
+            raise ConfigError(f"randomize: per-episode models need plant = 'mujoco', got plant = "
+                              f"{self.plant!r}")
+
+    def _check_sensing_and_actuation(self) -> None:
+        """Validate the delay, dropout, lag and randomisation fields (all off by default)."""
+        for name in ("measurement_delay", "actuator_delay", "dropout", "actuator_tau"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) \
+                    or not np.isfinite(value) or value < 0:
+                raise ConfigError(f"{name}: expected a finite number ≥ 0, got {value!r}")
+            object.__setattr__(self, name, float(value))
+        for name in ("measurement_delay", "actuator_delay"):
+            periods = getattr(self, name) / self.control_period
+            if not periods <= MAX_DELAY_PERIODS:
+                raise ConfigError(f"{name}: expected at most {MAX_DELAY_PERIODS:,} control "
+                                  f"periods (the ceiling; each is a ring-buffer slot per "
+                                  f"episode), got {getattr(self, name)!r} s")
+            if abs(periods - round(periods)) > 1e-9 * max(1.0, periods):
+                raise ConfigError(f"{name}: expected a whole number of control periods "
+                                  f"(T = {self.control_period:g} s), got {getattr(self, name)!r} s")
+        if self.dropout >= 1:
+            raise ConfigError(f"dropout: expected a probability in [0, 1), got {self.dropout!r}")
+        object.__setattr__(self, "randomize", Randomization.from_mapping(self.randomize))
+
+    @property
+    def measurement_delay_periods(self) -> int:
+        """The measurement delay in control periods."""
+        return round(self.measurement_delay / self.control_period)
+
+    @property
+    def actuator_delay_periods(self) -> int:
+        """The actuator delay in control periods."""
+        return round(self.actuator_delay / self.control_period)
+
+    @property
+    def n_periods(self) -> int:
+        return max(1, round(self.duration / self.control_period))
+
+    def replace(self, **changes: object) -> Scenario:
+        return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
+
+    def to_dict(self) -> dict[str, object]:
+        d = dataclasses.asdict(self)
+        d["overrides"] = {k: v for k, v in d["overrides"].items() if v is not None}
+        d["randomize"] = {k: list(v) for k, v in d["randomize"].items() if v is not None}
+        return d
+

@@ -1,0 +1,44 @@
+"""Timing bounds of a scenario from the Python API, checked before any loop starts."""
+
+from __future__ import annotations
+
+import pytest
+
+from pendulum_lqg.errors import ConfigError
+
+
+def test_timing_bounds_from_the_python_api():
+    from pendulum_lqg.limits import (
+        MAX_CONTROL_PERIOD,
+        MAX_PERIODS,
+        MAX_STEPS_PER_PERIOD,
+        check_duration,
+    )
+    from pendulum_lqg.plant import ModelOverrides, load_plant, steps_per_period
+
+    plant = load_plant()
+    assert steps_per_period(plant, MAX_CONTROL_PERIOD) == round(MAX_CONTROL_PERIOD / 1e-3)
+    with pytest.raises(ConfigError, match=r"^control_period: expected at most 1 s"):
+        steps_per_period(plant, 1.001)
+    with pytest.raises(ConfigError, match=r"^control_period: expected a finite positive number"):
+        steps_per_period(plant, 0.01 + 0j)
+    fine = load_plant(overrides=ModelOverrides(timestep=1e-5))   # 1 s = 100 000 steps of 10 µs
+    assert steps_per_period(fine, MAX_STEPS_PER_PERIOD * 1e-5) == MAX_STEPS_PER_PERIOD
+    with pytest.raises(ConfigError, match=r"^control_period: expected at most 10000 physics"):
+        steps_per_period(fine, 0.5)
+    assert check_duration(MAX_PERIODS * 0.01, 0.01) == MAX_PERIODS * 0.01
+    for bad in (1e308, MAX_PERIODS * 0.0101, float("inf"), -1.0, True, "10"):
+        with pytest.raises(ConfigError, match=r"^duration: expected"):
+            check_duration(bad, 0.01)
+
+
+def test_a_run_with_an_endless_duration_is_refused_before_the_loop():
+    from pendulum_lqg.core.scenario import Scenario
+    from pendulum_lqg.plant import load_plant
+    from pendulum_lqg.plugins import build_policy
+
+    with pytest.raises(ConfigError, match=r"^duration: expected at most"):
+        build_policy("dlqr+kalman", plant=load_plant(), scenario=Scenario(duration=1e300))
+
+
+# ---- 2. the design API under garbage input -----------------------------------------------------
