@@ -14,13 +14,19 @@ with ``E{wwᵀ} = W·T`` (the context's state-form density over one period) and 
   differ by O(T));
 * estimator — DARE for ``(Φᵀ, Cᵀ, W·T, V)`` gives the a-priori covariance ``M``; filter gain
   ``L = M Cᵀ (C M Cᵀ + V)⁻¹``; each sample ``x̂ = x̄ + L (y − C x̄)``, ``u = sat(−K x̂)``,
-  ``x̄ ← Φ x̂ + Γ u`` with the saturated force (the benchmark saturates at ``u_max`` too).
+  ``x̄ ← Φ x̂ + Γ u`` with the saturated force (the benchmark saturates at ``u_max`` too); a
+  lost sample (``--dropout``, a measurement delay's first samples: nan) keeps ``x̂ = x̄``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from scipy.linalg import solve_discrete_are
+
+
+def mv(M: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """``X @ M.T`` row by row: (n, j) rows of ``M`` (i, j) times each row of ``X``."""
+    return np.einsum("ij,nj->ni", M, X)
 
 
 class DiscreteLQG:
@@ -37,9 +43,13 @@ class DiscreteLQG:
         self.x_hat = np.zeros((n, 4))
 
     def act(self, y: np.ndarray) -> np.ndarray:
-        self.x_hat = self.x_bar + (y - self.x_bar @ self.C.T) @ self.L.T
-        u = np.clip(-(self.x_hat @ self.K.T), -self.u_max, self.u_max)
-        self.x_bar = self.x_hat @ self.Phi.T + u @ self.Gamma.T
+        # Row-wise products (einsum, no BLAS): a BLAS matrix product may round a row differently
+        # with another number of rows, and then one episode's numbers would depend on its batch.
+        innovation = y - mv(self.C, self.x_bar)
+        innovation[~np.isfinite(y).all(axis=1)] = 0.0     # a lost sample (nan): predict only
+        self.x_hat = self.x_bar + mv(self.L, innovation)
+        u = np.clip(-mv(self.K, self.x_hat), -self.u_max, self.u_max)
+        self.x_bar = mv(self.Phi, self.x_hat) + mv(self.Gamma, u)
         return u[:, 0]
 
     def select(self, rows: np.ndarray) -> None:

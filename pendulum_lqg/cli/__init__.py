@@ -1,9 +1,11 @@
-"""The ``pendulum-lqg`` command: ``design``, ``run``, ``bench``, ``perf``, ``report``.
+"""The ``pendulum-lqg`` command: ``design``, ``run``, ``bench``, ``perf``, ``report``, ``score``,
+``board``.
 
-Modules: ``parser`` (the grammar and the arguments' conversions), ``design`` and ``commands`` (one
-function per subcommand). Only argument parsing and presentation live here; every computation is a
-library call. Heavy imports (numpy, MuJoCo, python-control, rich) happen inside the commands so
-``--help`` is instant. Bad input prints one line ``error: …`` naming the parameter and exits with status 2.
+Modules: ``parser`` (the grammar and the arguments' conversions), ``design``, ``commands`` and
+``score`` (one function per subcommand). Only argument parsing and presentation live here; every
+computation is a library call. Heavy imports (numpy, MuJoCo, python-control, rich) happen inside
+the commands so ``--help`` is instant. Bad input prints one line ``error: …`` naming the parameter
+and exits with status 2.
 """
 
 from __future__ import annotations
@@ -14,9 +16,10 @@ from collections.abc import Sequence
 from pendulum_lqg.cli.commands import cmd_bench, cmd_perf, cmd_report, cmd_run
 from pendulum_lqg.cli.design import cmd_design
 from pendulum_lqg.cli.parser import EXIT_USAGE, build_parser
+from pendulum_lqg.cli.score import cmd_board, cmd_score
 
 COMMANDS = {"design": cmd_design, "run": cmd_run, "bench": cmd_bench, "perf": cmd_perf,
-            "report": cmd_report}
+            "report": cmd_report, "score": cmd_score, "board": cmd_board}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

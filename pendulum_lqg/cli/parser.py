@@ -11,6 +11,7 @@ from collections.abc import Callable
 from typing import Any, NoReturn
 
 from pendulum_lqg import __version__
+from pendulum_lqg.cli.score import add_parsers as add_score_parsers
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS, PLANTS
 
 EXIT_USAGE = 2
@@ -255,6 +256,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--memory", action="store_true",
                    help="also measure peak memory of 1000-episode benches of 2 s and 10 s")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    add_score_parsers(sub, _positive_int)
     return parser
 
 

@@ -224,6 +224,11 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
                 "time": float(self._sim.t[0]), "force": force}
 
     @property
+    def normalize_action(self) -> bool:
+        """Actions are in ``[−1, 1]`` (mapped onto the force range), not newtons."""
+        return self._actions.normalize
+
+    @property
     def running_cost(self) -> float:
         """J so far in the current episode."""
         return self._running_cost

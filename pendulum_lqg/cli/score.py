@@ -1,0 +1,140 @@
+"""``pendulum-lqg score`` and ``pendulum-lqg board``: agents and policies meet LQG on the suites."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+
+def add_parsers(sub: Any, positive_int: Any) -> None:
+    """The ``score`` and ``board`` subcommands (``sub``: the command's subparsers)."""
+    p = sub.add_parser(
+        "score", help="score a policy or a Gymnasium agent on the suites (success, J, gap to LQG)",
+        description="Play the suites' fixed episodes with a built-in policy (controller+observer), "
+                    "a plug-in (MODULE:ATTR or path.py:ATTR) or a Gymnasium agent (--agent), and "
+                    "report per suite the success rate, the mean cost J of the successes and the "
+                    "optimality gap to the suite's reference LQG design.")
+    p.add_argument("policy", nargs="?", default=None, metavar="POLICY",
+                   help="built-in 'controller+observer' (e.g. dlqr+kalman) or plug-in MODULE:ATTR / "
+                        "path.py:ATTR, run through the batch")
+    p.add_argument("--agent", default=None, metavar="REF",
+                   help="a Gymnasium agent instead: MODULE:ATTR or path.py:ATTR naming a factory "
+                        "f(env) -> object with reset() and act(obs); or sb3:PATH.zip "
+                        "(a stable-baselines3 model, the rl extra)")
+    p.add_argument("--suite", action="append", default=None, metavar="NAME",
+                   help="suite name or file (repeatable), or 'all' (the default): "
+                        "full-state, lecture, mismatch, delayed, lossy, noisy, hard")
+    p.add_argument("--episodes", type=positive_int, default=None, metavar="N",
+                   help="episodes per suite instead of the suite's own (a quick score; "
+                        "its fingerprint then differs from the full one)")
+    p.add_argument("--normalize-action", action="store_true",
+                   help="Gymnasium agents act in [-1, 1] (the env's normalize_action)")
+    p.add_argument("--nthread", type=positive_int, default=None,
+                   help="physics threads of the batch path (default: the CPU cores, at most 8)")
+    p.add_argument("--json", action="store_true", help="print the score file (JSON) instead")
+    p.add_argument("--out", default=None, metavar="FILE", help="also write the score file here")
+
+    p = sub.add_parser("board", help="turn a folder of score files into a Markdown leaderboard",
+                       description="Read the score files (*.json) of DIR and print one Markdown "
+                                   "table: a row per entry, a column group per suite.")
+    p.add_argument("dir", metavar="DIR", help="folder of score files (pendulum-lqg score --out)")
+    p.add_argument("--out", default=None, metavar="FILE", help="write the table to FILE too")
+
+
+def cmd_score(args: argparse.Namespace) -> int:
+    from pendulum_lqg.bench.results import versions
+    from pendulum_lqg.errors import ConfigError
+    from pendulum_lqg.files import atomic_write
+    from pendulum_lqg.plugins import is_plugin_ref
+    from pendulum_lqg.scoreboard import episodes as ep
+    from pendulum_lqg.scoreboard.score import score_document
+    from pendulum_lqg.scoreboard.suites import load_suite, suite_names
+
+    if (args.policy is None) == (args.agent is None):
+        raise ConfigError("score: give one POLICY or one --agent REF")
+    wanted = args.suite or ["all"]
+    names = suite_names() if "all" in wanted else wanted
+    suites = [load_suite(n).with_episodes(args.episodes) for n in names]
+    out = Path(args.out) if args.out else None
+    if out is not None and out.is_dir():
+        raise ConfigError(f"--out: {out} is a folder; expected a file name for the score (JSON)")
+    if args.agent is not None:
+        factory = ep.load_agent(args.agent)
+        normalized = args.normalize_action or bool(getattr(factory, "normalize_action", False))
+        name, kind = args.agent, "agent"
+
+        def rows_of(s: Any) -> list[dict[str, Any]]:
+            return ep.agent_rows(s, factory, name=name, normalize_action=normalized)
+    else:
+        name = args.policy
+        if not name:
+            raise ConfigError("policy: expected 'controller+observer' or a plug-in MODULE:ATTR, "
+                              "got ''")
+        kind = "plugin" if is_plugin_ref(name) else "builtin"
+
+        def rows_of(s: Any) -> list[dict[str, Any]]:
+            return ep.policy_rows(s, name, base_dir=Path.cwd(), nthread=args.nthread)
+
+    cache: dict[tuple[str, str], list[dict[str, Any]]] = {}
+
+    def reference_of(s: Any) -> list[dict[str, Any]]:
+        key = (s.name, s.reference)
+        if key not in cache:
+            cache[key] = ep.policy_rows(s, s.reference, nthread=args.nthread)
+        return cache[key]
+
+    def bound_of(s: Any) -> list[dict[str, Any]]:
+        return ep.full_state_rows(s, nthread=args.nthread)
+
+    def rows_or_reference(s: Any) -> list[dict[str, Any]]:
+        if kind == "builtin" and name == s.reference:     # the reference itself: one run
+            return reference_of(s)
+        return rows_of(s)
+
+    doc = score_document(name, kind, suites, rows_or_reference, reference_of, bound_of, versions())
+    text = json.dumps(doc, indent=1, allow_nan=False)
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(out, text + "\n")
+    if args.json:
+        print(text)
+    else:
+        _print_score(doc)
+    return 0
+
+
+def _print_score(doc: dict[str, Any]) -> None:
+    def f(v: Any, fmt: str) -> str:
+        return "–" if v is None else format(v, fmt)
+
+    print(f"score of {doc['policy']} ({doc['kind']})")
+    print("| suite | episodes | success [95 % CI] | J (successes) | gap to reference [95 % CI] | "
+          "reference: success, J | full-state LQR: success, J |")
+    print("|---|---|---|---|---|---|---|")
+    for name, e in doc["suites"].items():
+        lo, hi = e["success_ci"]
+        glo, ghi = e["gap_ci"]
+        gap = f(e["optimality_gap"], "+.3f") + ("" if glo is None else f" [{glo:+.3f}, {ghi:+.3f}]")
+        ref, full = e["reference"], e["full_state_bound"]
+        cost = f(e["cost_mean"], ".3g") + ("" if e["cost_se"] is None else f" ± {e['cost_se']:.2g}")
+        print(f"| {name} | {e['episodes']} | {100 * e['success_rate']:.0f} % [{100 * lo:.0f}, "
+              f"{100 * hi:.0f}] | {cost} | {gap} | {ref['policy']}: "
+              f"{100 * ref['success_rate']:.0f} %, {f(ref['cost_mean'], '.3g')} | "
+              f"{100 * full['success_rate']:.0f} %, {f(full['cost_mean'], '.3g')} |")
+    sys.stdout.flush()
+
+
+def cmd_board(args: argparse.Namespace) -> int:
+    from pendulum_lqg.files import atomic_write
+    from pendulum_lqg.scoreboard.board import make_board
+
+    table = make_board(Path(args.dir))
+    if args.out:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(out, table)
+    print(table, end="")
+    return 0

@@ -1,0 +1,121 @@
+"""stable-baselines3 models as Gymnasium agents: ``--agent sb3:PATH.zip`` (the ``rl`` extra).
+
+A model is a zip saved by stable-baselines3 with a JSON file beside it, ``PATH.json``, that says how
+it was trained (the training script writes it)::
+
+    {"algo": "PPO",                  # PPO, SAC, TD3, A2C (stable-baselines3), RecurrentPPO (sb3-contrib)
+     "frame_stack": 8,               # VecFrameStack's n_stack (1: none)
+     "obs_norm": {"mean": [...], "var": [...], "clip": 10.0, "epsilon": 1e-8},  # VecNormalize, or null
+     "normalize_action": false,      # trained on actions in [−1, 1]
+     "env": {...},                   # the env keywords it was trained on
+     "budget": {...}}                # steps, seeds, wall time
+
+:class:`SB3Agent` replays the training-time wrappers for one env — observation normalisation with
+the frozen statistics, then the frame stack (newest frame last, zeros before the first, as
+``VecFrameStack``) — and asks the model's ``predict`` for a deterministic action, carrying a
+recurrent policy's state across the episode. Nothing here imports torch until a model is loaded.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from pendulum_lqg.errors import ConfigError, PluginError
+
+#: The algorithms a model file may name, and the package each comes from.
+ALGORITHMS = {"PPO": "stable_baselines3", "SAC": "stable_baselines3", "TD3": "stable_baselines3",
+              "A2C": "stable_baselines3", "DDPG": "stable_baselines3",
+              "RecurrentPPO": "sb3_contrib", "TQC": "sb3_contrib"}
+
+
+class SB3Agent:
+    """A model with stable-baselines3's ``predict(observation, state, episode_start,
+    deterministic)`` as an agent of one env (see the module docstring)."""
+
+    def __init__(self, model: Any, *, frame_stack: int = 1,
+                 obs_norm: dict[str, Any] | None = None) -> None:
+        if isinstance(frame_stack, bool) or not isinstance(frame_stack, int) or frame_stack < 1:
+            raise ConfigError(f"frame_stack: expected a positive integer, got {frame_stack!r}")
+        self.model, self.frame_stack = model, frame_stack
+        self.obs_norm = None
+        if obs_norm is not None:
+            self.obs_norm = (np.asarray(obs_norm["mean"], dtype=float),
+                             np.sqrt(np.asarray(obs_norm["var"], dtype=float)
+                                     + float(obs_norm.get("epsilon", 1e-8))),
+                             float(obs_norm.get("clip", 10.0)))
+        self._stack: np.ndarray | None = None
+        self._state: Any = None
+        self._start = True
+
+    def reset(self) -> None:
+        self._stack, self._state, self._start = None, None, True
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        obs = np.asarray(observation, dtype=float)
+        if self.obs_norm is not None:
+            mean, std, clip = self.obs_norm
+            obs = np.clip((obs - mean) / std, -clip, clip)
+        if self._stack is None:
+            self._stack = np.zeros(obs.size * self.frame_stack)
+        self._stack = np.roll(self._stack, -obs.size)
+        self._stack[-obs.size:] = obs
+        action, self._state = self.model.predict(
+            self._stack[None, :], state=self._state,
+            episode_start=np.array([self._start]), deterministic=True)
+        self._start = False
+        return np.asarray(action, dtype=float).reshape(1)
+
+
+def read_metadata(path: Path) -> dict[str, Any]:
+    """The training record beside a model zip (``PATH.json``)."""
+    meta_path = path.with_suffix(".json")
+    try:
+        meta = json.loads(meta_path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ConfigError(f"agent: sb3:{path} needs its training record {meta_path} "
+                          f"({exc.strerror or exc})") from exc
+    except ValueError as exc:
+        raise ConfigError(f"agent: {meta_path} is not valid JSON ({exc})") from exc
+    if not isinstance(meta, dict) or meta.get("algo") not in ALGORITHMS:
+        raise ConfigError(f"agent: {meta_path}: algo: expected one of {', '.join(ALGORITHMS)}, "
+                          f"got {meta.get('algo') if isinstance(meta, dict) else meta!r}")
+    return meta
+
+
+def load_model(path: Path, algo: str) -> Any:
+    """Load the model with its algorithm's class (needs the ``rl`` extra)."""
+    import importlib
+
+    try:
+        module = importlib.import_module(ALGORITHMS[algo])
+    except ImportError as exc:
+        raise ConfigError(f"agent: sb3:{path} needs {ALGORITHMS[algo].replace('_', '-')} "
+                          "(install the rl extra: pip install 'pendulum_lqg-…whl[rl]')") from exc
+    try:
+        return getattr(module, algo).load(str(path), device="cpu")
+    except Exception as exc:
+        raise PluginError(f"agent: sb3:{path}: {algo}.load raised {type(exc).__name__}: "
+                          f"{' '.join(str(exc).split())[:200]}") from exc
+
+
+def sb3_agent(path_text: str) -> Any:
+    """The agent factory of ``sb3:PATH.zip``; its ``normalize_action`` attribute tells the score
+    which action space the model was trained on."""
+    path = Path(path_text)
+    if not path.is_file():
+        raise ConfigError(f"agent: sb3:{path_text}: no such model file")
+    meta = read_metadata(path)
+    model = load_model(path, meta["algo"])
+
+    def factory(env: gym.Env) -> SB3Agent:
+        return SB3Agent(model, frame_stack=int(meta.get("frame_stack", 1)),
+                        obs_norm=meta.get("obs_norm"))
+
+    factory.normalize_action = bool(meta.get("normalize_action", False))   # type: ignore[attr-defined]
+    factory.env = dict(meta.get("env", {}))                                # type: ignore[attr-defined]
+    return factory

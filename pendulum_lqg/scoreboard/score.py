@@ -1,0 +1,103 @@
+"""The score of a policy or agent on the suites: success, cost and the optimality gap to LQG.
+
+Per suite, over its ``episodes`` fixed seeds (the same episodes for every entry):
+
+* **success rate** — the share of episodes that reach the end without failing, with its 95 %
+  Wilson score interval;
+* **mean J** — the mean cost ``J = ∫ xᵀQx + R u² dt`` of the successful episodes, with its standard
+  error (failed episodes end early, so their J is not comparable);
+* **optimality gap** — on the episodes that *both* the entry and the suite's reference policy
+  survived (set ``S``), ``gap = mean_S(J) / mean_S(J_ref) − 1``: 0 means as good as the
+  reference LQG design, 0.5 means 50 % more cost, a negative gap beats it. Episodes either one
+  failed are left out of the gap and counted by the success rate instead; with no common
+  survivor the gap is ``null``. Its 95 % interval is a paired bootstrap over ``S`` (the same
+  resampled episodes for both; 2 000 resamples, a fixed seed, so it is reproducible). The
+  reference's gap to itself is exactly 0 (the same rows, the same sums).
+* **full-state bound** — the full-state LQR (``dlqr+none``, observing the true state without
+  noise) on the same seeds: its success rate and mean J say what observation costs, the floor no
+  estimator reaches.
+
+The score never uses the Gymnasium reward: only success and J.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from pendulum_lqg.core.metrics import mean_se, wilson_interval
+from pendulum_lqg.scoreboard.suites import Suite
+
+#: Version of the score files' layout.
+SCORE_VERSION = 1
+#: Paired bootstrap resamples of the gap's interval, and their seed.
+BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED = 2000, 0
+#: The full-state LQR whose figures bound what observation costs.
+FULL_STATE_POLICY = "dlqr+none"
+
+
+def success_figures(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Success rate with its Wilson interval, mean J of the successes with its standard error."""
+    n = len(rows)
+    wins = sum(bool(r["success"]) for r in rows)
+    lo, hi = wilson_interval(wins, n)
+    mean, se = mean_se(np.array([r["cost"] for r in rows if r["success"]], dtype=float))
+    return {"episodes": n, "successes": wins, "success_rate": wins / n if n else math.nan,
+            "success_ci": [lo, hi], "cost_mean": _finite(mean), "cost_se": _finite(se)}
+
+
+def optimality_gap(rows: Sequence[dict[str, Any]], reference: Sequence[dict[str, Any]],
+                   ) -> dict[str, Any]:
+    """The gap to ``reference`` on the episodes both survived, with its paired bootstrap interval
+    (see the module docstring). Rows are matched by ``episode``."""
+    ref = {r["episode"]: r for r in reference}
+    both = [(r["cost"], ref[r["episode"]]["cost"]) for r in rows
+            if r["success"] and r["episode"] in ref and ref[r["episode"]]["success"]]
+    if not both:
+        return {"optimality_gap": None, "gap_ci": [None, None], "gap_episodes": 0}
+    j, j_ref = np.array(both, dtype=float).T
+    gap = float(j.mean() / j_ref.mean() - 1.0)
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    idx = rng.integers(0, j.size, size=(BOOTSTRAP_RESAMPLES, j.size))
+    gaps = j[idx].mean(axis=1) / j_ref[idx].mean(axis=1) - 1.0
+    lo, hi = np.percentile(gaps, [2.5, 97.5])
+    return {"optimality_gap": gap, "gap_ci": [float(lo), float(hi)], "gap_episodes": int(j.size)}
+
+
+def suite_score(suite: Suite, rows: Sequence[dict[str, Any]], reference: Sequence[dict[str, Any]],
+                bound: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """One suite's entry of a score file (see :func:`score_document`)."""
+    if [r["episode"] for r in rows] != list(range(suite.episodes)):
+        raise ValueError(f"suite {suite.name!r}: the rows are not episodes 0 … {suite.episodes - 1}")
+    out = {**success_figures(rows), **optimality_gap(rows, reference)}
+    ref = success_figures(reference)
+    out["reference"] = {"policy": suite.reference, "success_rate": ref["success_rate"],
+                        "cost_mean": ref["cost_mean"]}
+    full = success_figures(bound)
+    out["full_state_bound"] = {"policy": FULL_STATE_POLICY, "success_rate": full["success_rate"],
+                               "cost_mean": full["cost_mean"]}
+    out["version"] = suite.version
+    out["fingerprint"] = suite.fingerprint()
+    out["rows"] = [dict(r) for r in rows]
+    return out
+
+
+def score_document(policy: str, kind: str, suites: Sequence[Suite],
+                   rows_of: Callable[[Suite], list[dict[str, Any]]],
+                   reference_of: Callable[[Suite], list[dict[str, Any]]],
+                   bound_of: Callable[[Suite], list[dict[str, Any]]],
+                   versions: dict[str, str]) -> dict[str, Any]:
+    """The score file of ``policy``: ``{"policy", "kind", "score_version", "versions", "suites":
+    {name: {"episodes", "success_rate", "success_ci", "cost_mean", "cost_se", "optimality_gap",
+    "gap_ci", "gap_episodes", "reference", "full_state_bound", "version", "fingerprint",
+    "rows"}}}``. ``kind`` is ``"builtin"``, ``"plugin"`` or ``"agent"``."""
+    return {"policy": policy, "kind": kind, "score_version": SCORE_VERSION, "versions": versions,
+            "suites": {s.name: suite_score(s, rows_of(s), reference_of(s), bound_of(s))
+                       for s in suites}}
+
+
+def _finite(value: float) -> float | None:
+    return None if not math.isfinite(value) else float(value)
