@@ -3,8 +3,8 @@
 :class:`LQGAgent` designs from the environment's own model and control period with
 :func:`~pendulum_lqg.policy.design_policy` — the very policy ``pendulum-lqg bench`` runs — and sees
 nothing but the observations the env hands out. Over the same episode seeds
-(``env.reset(seed=episode_seed(s, k))``) it reproduces ``bench``'s episodes bit for bit, so its
-success rate and mean J equal the benchmark's.
+(``env.reset(seed=episode_seed(s, k))``) it reproduces ``bench``'s episodes bit for bit (to rounding
+error with ``normalize_action=True``), so its success rate and mean J equal the benchmark's.
 
 Example::
 
@@ -51,6 +51,11 @@ class LQGAgent:
     With a single env, ``act`` takes an observation (2,) or (4,) and returns a float64 action (1,);
     with the vector env, observations (num_envs, ·) and actions (num_envs, 1). The actions are
     float64 on purpose: the env applies them at that precision, so the forces equal ``bench``'s.
+
+    With ``normalize_action=True`` the actions are the env's own: each force mapped into
+    ``[−1, 1]`` by the inverse of the env's map. The forces then agree with ``bench``'s to a few
+    ulps of the force limit rather than bit for bit (the env's map rounds ``a + 1``), so the
+    episodes' outcomes are the same and their J agree to rounding error.
     """
 
     def __init__(self, env: gym.Env | CartPoleLQGVectorEnv, spec: DesignSpec | None = None, *,
@@ -78,6 +83,8 @@ class LQGAgent:
         if base.observation_mode != wants:
             raise ConfigError(f"observer: {spec.observer!r} needs observation_mode={wants!r}, "
                               f"the env has {base.observation_mode!r}")
+        #: the env's map between actions and newtons (identity unless normalize_action)
+        self._actions = base._actions
         self.vector = isinstance(base, CartPoleLQGVectorEnv)
         self.num_envs = base.num_envs if isinstance(base, CartPoleLQGVectorEnv) else 1
         self._obs_dim = 4 if wants == "state" else 2
@@ -113,5 +120,5 @@ class LQGAgent:
         if obs.shape[-1:] != (self._obs_dim,) or obs.size != self.num_envs * self._obs_dim:
             want = (self._obs_dim,) if not self.vector else (self.num_envs, self._obs_dim)
             raise ShapeError(f"observation: expected shape {want}, found {obs.shape}")
-        u = self.policy.act(obs.reshape(self.num_envs, self._obs_dim))
+        u = self._actions.from_newtons(self.policy.act(obs.reshape(self.num_envs, self._obs_dim)))
         return u.reshape(self.num_envs, 1) if self.vector else u.reshape(1)

@@ -162,9 +162,16 @@ def _action_force(action: object, n: int) -> np.ndarray:
             return u
         raise PendulumLQGError(f"action: expected finite forces, got {u!r}")
     try:
-        u = np.asarray(action, dtype=np.float64)
+        u = np.asarray(action)
+        complex_action = u.dtype.kind == "c"        # a cast would drop the imaginary part
+        if not complex_action:
+            u = np.asarray(u, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ShapeError(f"action: expected {n} force(s) in newtons, got {action!r}") from exc
+        raise ShapeError(f"action: expected {n} force(s) in newtons, got {_short(action)}") \
+            from exc
+    if complex_action:
+        raise PendulumLQGError(f"action: expected real forces in newtons, got complex "
+                               f"{_short(action)}")
     if u.shape not in ((n,), (n, 1)) and not (n == 1 and u.shape == ()):
         want = "(1,)" if n == 1 else f"({n}, 1)"
         raise ShapeError(f"action: expected shape {want}, found {u.shape}")
@@ -172,6 +179,12 @@ def _action_force(action: object, n: int) -> np.ndarray:
     if not np.all(np.isfinite(u)):
         raise PendulumLQGError(f"action: expected finite forces, got {u!r}")
     return u
+
+
+def _short(value: object) -> str:
+    """``repr(value)`` on one line, cut to a readable length."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 120 else text[:117] + "..."
 
 
 class Actions:
@@ -212,4 +225,13 @@ class Actions:
         """Actions → requested forces: ``[−1, 1]`` onto ``[lo, hi]`` when normalized."""
         if self.normalize:
             return self.lo + (u + 1.0) * (0.5 * (self.hi - self.lo))
+        return u
+
+    def from_newtons(self, u: np.ndarray) -> np.ndarray:
+        """Requested forces [N] → the actions that request them: the inverse of the map above.
+
+        Normalized, the round trip agrees to a few ulps of the force limit, not bit for bit: the
+        map rounds ``a + 1``, which keeps a small force to about 1e-16 of the limit only."""
+        if self.normalize:
+            return (u - self.lo) / (0.5 * (self.hi - self.lo)) - 1.0
         return u
