@@ -66,7 +66,11 @@ def period_model(model: mujoco.MjModel, k: int) -> tuple[np.ndarray, np.ndarray]
 
 def make(env) -> PythonControlLQG:
     """The agent factory ``f(env)``: designs from the env's model, period, weights and noise."""
+    from pendulum_lqg.scoreboard.episodes import NotApplicable
+
     base = env.unwrapped
+    if base.observation_mode != "measurement":
+        raise NotApplicable("this agent estimates the state from y = [p, θ]; the env gives x")
     model, sc = base.plant.model, base.scenario
     k = round(sc.control_period / model.opt.timestep)
     T = k * model.opt.timestep

@@ -115,6 +115,9 @@ def _print_score(doc: dict[str, Any]) -> None:
           "reference: success, J | full-state LQR: success, J |")
     print("|---|---|---|---|---|---|---|")
     for name, e in doc["suites"].items():
+        if not e["applicable"]:
+            print(f"| {name} | {e['episodes']} | not applicable: {e['reason']} | | | | |")
+            continue
         lo, hi = e["success_ci"]
         glo, ghi = e["gap_ci"]
         gap = f(e["optimality_gap"], "+.3f") + ("" if glo is None else f" [{glo:+.3f}, {ghi:+.3f}]")

@@ -71,6 +71,9 @@ def make_board(folder: Path) -> str:
         cells = [f"`{d['policy']}`", str(d.get("kind", ""))]
         for s in suites:
             e = d["suites"].get(s)
+            if e is not None and not e.get("applicable", True):
+                cells += ["n/a", "", ""]
+                continue
             if e is None or e.get("fingerprint") != prints[s]:
                 if e is not None:
                     stale.append(f"`{d['policy']}` on `{s}` ({path.name}: suite fingerprint "
@@ -82,8 +85,12 @@ def make_board(folder: Path) -> str:
     for label, key in (("reference", "reference"), ("full-state bound", "full_state_bound")):
         cells = [label, ""]
         for s in suites:
-            e = next(d["suites"][s] for _, d in scores
-                     if s in d["suites"] and d["suites"][s]["fingerprint"] == prints[s])
+            e = next((d["suites"][s] for _, d in scores
+                      if s in d["suites"] and d["suites"][s]["fingerprint"] == prints[s]
+                      and d["suites"][s].get("applicable", True)), None)
+            if e is None:
+                cells += ["", "", ""]
+                continue
             ref = e[key]
             cells += [_pct(ref["success_rate"]), _num(ref["cost_mean"]), f"`{ref['policy']}`"]
         lines.append("| " + " | ".join(cells) + " |")

@@ -30,6 +30,13 @@ from pendulum_lqg.plant import load_plant
 from pendulum_lqg.plugins import build_policy, is_plugin_ref, load_factory
 from pendulum_lqg.scoreboard.suites import Suite
 
+
+class NotApplicable(ConfigError):
+    """A policy or agent that cannot play a suite as the suite is posed (it observes something else:
+    the true state where the suite gives only ``y``, or the reverse). Its score row for that suite
+    says so instead of a number. An agent factory may raise it to decline an env."""
+
+
 #: The fields of a scored episode row.
 ROW_FIELDS = ("episode", "seed", "success", "failure_reason", "cost")
 
@@ -78,12 +85,12 @@ def _batch_rows(suite: Suite, policy: str, *, base_dir: Path | None, nthread: in
 
 def _check_observation(suite: Suite, name: str, needs_state: bool) -> None:
     if suite.observes_state and not needs_state:
-        raise ConfigError(f"policy {name!r}: suite {suite.name!r} observes the true state; use a "
-                          "full-state policy (controller+none, or a plug-in with needs_state = "
-                          "True)")
+        raise NotApplicable(f"policy {name!r} takes y = [p, θ]; suite {suite.name!r} gives the "
+                            "true state (a full-state policy: controller+none, or a plug-in with "
+                            "needs_state = True)")
     if needs_state and not suite.observes_state:
-        raise ConfigError(f"policy {name!r} needs the true state, which suite {suite.name!r} "
-                          "does not give (it observes y = [p, θ])")
+        raise NotApplicable(f"policy {name!r} needs the true state, which suite {suite.name!r} "
+                            "does not give (it observes y = [p, θ])")
 
 
 # ---- the Gymnasium path ---------------------------------------------------------------------------
@@ -99,7 +106,7 @@ def agent_rows(suite: Suite, factory: AgentFactory, *, name: str = "agent",
     env = make_env(suite, normalize_action=normalize_action)
     try:
         agent = factory(env)
-    except (PluginError, ConfigError):
+    except (PluginError, ConfigError):          # NotApplicable among them: the agent declines
         raise
     except Exception as exc:
         raise PluginError(f"agent {name!r}: the factory raised {type(exc).__name__}: "
@@ -136,6 +143,8 @@ class PluginAgent:
         if base.normalize_action:
             raise ConfigError(f"agent {ref!r}: a plug-in acts in newtons; score it on an env "
                               "without normalize_action")
+        _check_observation_mode(ref, base.observation_mode,
+                                bool(getattr(self.policy, "needs_state", False)))
 
     def reset(self) -> None:
         self.policy.reset(1)
@@ -143,6 +152,12 @@ class PluginAgent:
     def act(self, observation: np.ndarray) -> np.ndarray:
         return np.asarray(self.policy.act(np.asarray(observation, dtype=float)[None, :]),
                           dtype=float).reshape(1)
+
+
+def _check_observation_mode(name: str, mode: str, needs_state: bool) -> None:
+    if (mode == "state") != needs_state:
+        raise NotApplicable(f"policy {name!r} observes {'x' if needs_state else 'y = [p, θ]'}; "
+                            f"this env gives {'x' if mode == 'state' else 'y = [p, θ]'}")
 
 
 def plugin_agent(ref: str, *, base_dir: Path | None = None) -> AgentFactory:

@@ -5,15 +5,16 @@ it was trained (the training script writes it)::
 
     {"algo": "PPO",                  # PPO, SAC, TD3, A2C (stable-baselines3), RecurrentPPO (sb3-contrib)
      "frame_stack": 8,               # VecFrameStack's n_stack (1: none)
-     "obs_norm": {"mean": [...], "var": [...], "clip": 10.0, "epsilon": 1e-8},  # VecNormalize, or null
+     "obs_norm": {"mean": [...], "var": [...], "clip": 10.0, "epsilon": 1e-8},  # of the stack, or null
      "normalize_action": false,      # trained on actions in [−1, 1]
      "env": {...},                   # the env keywords it was trained on
      "budget": {...}}                # steps, seeds, wall time
 
-:class:`SB3Agent` replays the training-time wrappers for one env — observation normalisation with
-the frozen statistics, then the frame stack (newest frame last, zeros before the first, as
-``VecFrameStack``) — and asks the model's ``predict`` for a deterministic action, carrying a
-recurrent policy's state across the episode. Nothing here imports torch until a model is loaded.
+:class:`SB3Agent` replays the training-time wrappers ``VecNormalize(VecFrameStack(env))`` for one
+env — the frame stack (newest frame last, zeros before the first, as ``VecFrameStack``), then the
+normalisation of the stacked observation with the frozen statistics — and asks the model's
+``predict`` for a deterministic action, carrying a recurrent policy's state across the episode.
+Nothing here imports torch until a model is loaded.
 """
 
 from __future__ import annotations
@@ -57,15 +58,16 @@ class SB3Agent:
 
     def act(self, observation: np.ndarray) -> np.ndarray:
         obs = np.asarray(observation, dtype=float)
-        if self.obs_norm is not None:
-            mean, std, clip = self.obs_norm
-            obs = np.clip((obs - mean) / std, -clip, clip)
         if self._stack is None:
             self._stack = np.zeros(obs.size * self.frame_stack)
         self._stack = np.roll(self._stack, -obs.size)
         self._stack[-obs.size:] = obs
+        seen = self._stack
+        if self.obs_norm is not None:
+            mean, std, clip = self.obs_norm
+            seen = np.clip((seen - mean) / std, -clip, clip)
         action, self._state = self.model.predict(
-            self._stack[None, :], state=self._state,
+            seen[None, :], state=self._state,
             episode_start=np.array([self._start]), deterministic=True)
         self._start = False
         return np.asarray(action, dtype=float).reshape(1)
@@ -112,7 +114,15 @@ def sb3_agent(path_text: str) -> Any:
     meta = read_metadata(path)
     model = load_model(path, meta["algo"])
 
+    trained_on = meta.get("env", {}).get("observation_mode", "measurement")
+
     def factory(env: gym.Env) -> SB3Agent:
+        from pendulum_lqg.scoreboard.episodes import NotApplicable
+
+        mode = getattr(env.unwrapped, "observation_mode", None)
+        if mode != trained_on:
+            raise NotApplicable(f"agent sb3:{path_text} was trained on observation_mode = "
+                                f"{trained_on!r}; this suite's env has {mode!r}")
         return SB3Agent(model, frame_stack=int(meta.get("frame_stack", 1)),
                         obs_norm=meta.get("obs_norm"))
 

@@ -91,12 +91,25 @@ def score_document(policy: str, kind: str, suites: Sequence[Suite],
                    bound_of: Callable[[Suite], list[dict[str, Any]]],
                    versions: dict[str, str]) -> dict[str, Any]:
     """The score file of ``policy``: ``{"policy", "kind", "score_version", "versions", "suites":
-    {name: {"episodes", "success_rate", "success_ci", "cost_mean", "cost_se", "optimality_gap",
-    "gap_ci", "gap_episodes", "reference", "full_state_bound", "version", "fingerprint",
-    "rows"}}}``. ``kind`` is ``"builtin"``, ``"plugin"`` or ``"agent"``."""
+    {name: {"applicable", "episodes", "success_rate", "success_ci", "cost_mean", "cost_se",
+    "optimality_gap", "gap_ci", "gap_episodes", "reference", "full_state_bound", "version",
+    "fingerprint", "rows"}}}``; a suite the entry cannot play as posed
+    (:class:`~pendulum_lqg.scoreboard.episodes.NotApplicable`) has ``"applicable": false`` and the
+    ``"reason"`` instead of the figures. ``kind`` is ``"builtin"``, ``"plugin"`` or ``"agent"``."""
+    from pendulum_lqg.scoreboard.episodes import NotApplicable
+
+    entries: dict[str, Any] = {}
+    for s in suites:
+        try:
+            rows = rows_of(s)
+        except NotApplicable as exc:        # a row that says why, not a number
+            entries[s.name] = {"applicable": False, "reason": str(exc), "episodes": s.episodes,
+                               "version": s.version, "fingerprint": s.fingerprint()}
+            continue
+        entries[s.name] = {"applicable": True,
+                           **suite_score(s, rows, reference_of(s), bound_of(s))}
     return {"policy": policy, "kind": kind, "score_version": SCORE_VERSION, "versions": versions,
-            "suites": {s.name: suite_score(s, rows_of(s), reference_of(s), bound_of(s))
-                       for s in suites}}
+            "suites": entries}
 
 
 def _finite(value: float) -> float | None:

@@ -116,12 +116,24 @@ def test_a_zero_force_agent_scores_success_zero_with_a_clear_row(capsys, tmp_pat
 def test_bad_score_arguments_are_one_line_errors(capsys):
     assert main(["score", "--suite", "lecture"]) == 2
     assert capsys.readouterr().err.strip() == "error: score: give one POLICY or one --agent REF"
-    assert main(["score", "dlqr+none", "--suite", "lecture", "--episodes", "2"]) == 2
-    assert "needs the true state, which suite 'lecture' does not give" in capsys.readouterr().err
-    assert main(["score", "dlqr+kalman", "--suite", "full-state", "--episodes", "2"]) == 2
-    assert "observes the true state" in capsys.readouterr().err
+    assert main(["score", "--agent", "no_such_module:make", "--suite", "lecture"]) == 2
+    assert capsys.readouterr().err.startswith("error: ")
     assert main(["score", "--agent", "sb3:/nonexistent.zip", "--suite", "lecture"]) == 2
     assert "no such model file" in capsys.readouterr().err
+
+
+def test_suite_all_gives_a_row_per_suite_and_says_where_a_policy_does_not_apply(capsys):
+    assert main(["score", "dlqr+kalman", "--suite", "all", "--episodes", "2", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert list(doc["suites"]) == list(SUITE_ORDER)                     # seven rows
+    full = doc["suites"]["full-state"]
+    assert full["applicable"] is False and "gives the true state" in full["reason"]
+    assert all(doc["suites"][s]["applicable"] for s in SUITE_ORDER[1:])
+    assert main(["score", "dlqr+none", "--suite", "lecture", "--suite", "full-state",
+                 "--episodes", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "| lecture | 2 | not applicable: policy 'dlqr+none' needs the true state" in out
+    assert "| full-state | 2 | 100 % [" in out
 
 
 class _StandIn:
@@ -135,22 +147,25 @@ class _StandIn:
         return observation @ self.gain, ("lstm", len(self.calls))
 
 
-def test_the_sb3_adapter_normalises_stacks_and_carries_the_recurrent_state():
+def test_the_sb3_adapter_stacks_normalises_and_carries_the_recurrent_state():
+    """VecNormalize(VecFrameStack(env)): stack the raw observations (zeros before the first),
+    then normalise the stack with the frozen statistics and clip."""
     model = _StandIn(np.arange(6.0)[:, None])
-    agent = SB3Agent(model, frame_stack=3, obs_norm={"mean": [1.0, 0.0], "var": [4.0, 1.0],
-                                                     "epsilon": 0.0, "clip": 5.0})
+    mean, var = np.array([0.0, 0.0, 1.0, 0.0, 1.0, 0.0]), np.array([1, 1, 4, 1, 4, 1.0])
+    agent = SB3Agent(model, frame_stack=3, obs_norm={"mean": mean, "var": var, "epsilon": 0.0,
+                                                     "clip": 5.0})
     agent.reset()
-    a1 = agent.act(np.array([3.0, 1.0]))              # normalised (1, 1), stacked after zeros
-    a2 = agent.act(np.array([1.0, 100.0]))            # (0, 5): clipped
-    np.testing.assert_array_equal(model.calls[0][0], [[0, 0, 0, 0, 1, 1]])
+    a1 = agent.act(np.array([3.0, 1.0]))
+    a2 = agent.act(np.array([1.0, 100.0]))             # 100 is clipped to 5
+    np.testing.assert_array_equal(model.calls[0][0], [[0, 0, -0.5, 0, 1, 1]])
     np.testing.assert_array_equal(model.calls[1][0], [[0, 0, 1, 1, 0, 5]])
-    assert a1.shape == (1,) and a1[0] == 4 + 5 and a2[0] == 2 + 3 + 25
+    assert a1.shape == (1,) and a1[0] == -1 + 4 + 5 and a2[0] == 2 + 3 + 25
     assert model.calls[0][1] is None and model.calls[1][1] == ("lstm", 1)    # state carried
     assert model.calls[0][2].tolist() == [True] and model.calls[1][2].tolist() == [False]
     assert all(c[3] is True for c in model.calls)                            # deterministic
     agent.reset()
     agent.act(np.array([1.0, 0.0]))
-    np.testing.assert_array_equal(model.calls[2][0], [[0, 0, 0, 0, 0, 0]])
+    np.testing.assert_array_equal(model.calls[2][0], [[0, 0, -0.5, 0, 0, 0]])
     assert model.calls[2][1] is None and model.calls[2][2].tolist() == [True]
 
 
