@@ -30,6 +30,7 @@ Rules the core enforces (documented in README "Benchmark your own controller"):
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import hashlib
 import importlib
@@ -161,16 +162,21 @@ def _is_path(module: str) -> bool:
 def load_factory(ref: str, *, base_dir: Path | None = None) -> Callable[[PolicyContext], Any]:
     """Import the factory named by ``ref`` (``MODULE:ATTR`` or ``path/to/file.py:ATTR``).
 
-    A file is imported as a module of its own (under a name derived from its path, so two plugin
-    files of the same name do not collide). Errors are one-line :class:`PluginError` messages.
+    A file is imported as a module of its own, under a name derived from its path and its content
+    (two plugin files of the same name do not collide, and a file edited since it was imported in
+    this process is imported afresh). Errors are one-line :class:`PluginError` messages.
     """
     module_name, attr = _split(resolve_ref(ref, base_dir))
     if _is_path(module_name):
         path = Path(module_name)
         if not path.is_file():
             raise PluginError(f"policy {ref!r}: no file {path}")
-        digest = hashlib.sha256(str(path).encode()).hexdigest()[:10]
-        name = f"_pendulum_lqg_plugin_{path.stem}_{digest}"
+        try:
+            content = path.read_bytes()
+        except OSError as exc:
+            raise PluginError(f"policy {ref!r}: cannot read {path}: {exc.strerror or exc}") from exc
+        where = hashlib.sha256(str(path).encode()).hexdigest()[:10]
+        name = f"_pendulum_lqg_plugin_{path.stem}_{where}_{hashlib.sha256(content).hexdigest()[:10]}"
         module = sys.modules.get(name)
         if module is None:
             spec = importlib.util.spec_from_file_location(name, path)
@@ -179,18 +185,17 @@ def load_factory(ref: str, *, base_dir: Path | None = None) -> Callable[[PolicyC
             module = importlib.util.module_from_spec(spec)
             sys.modules[name] = module
             try:
-                spec.loader.exec_module(module)
-            except Exception as exc:
+                guarded(ref, f"importing {path}", spec.loader.exec_module, module)
+            except PluginError:
                 del sys.modules[name]
-                raise PluginError(f"policy {ref!r}: importing {path} raised "
-                                  f"{_one_line(exc)}") from exc
+                raise
     else:
         try:
-            module = importlib.import_module(module_name)
-        except Exception as exc:
+            module = guarded(ref, "import", importlib.import_module, module_name)
+        except PluginError as exc:
             raise PluginError(f"policy {ref!r}: cannot import module {module_name!r}: "
-                              f"{_one_line(exc)}") from exc
-    factory = getattr(module, attr, None)
+                              f"{_one_line(exc.__cause__ or exc)}") from exc.__cause__
+    factory = guarded(ref, f"reading {attr}", getattr, module, attr, None)
     if factory is None:
         raise PluginError(f"policy {ref!r}: {module_name} has no attribute {attr!r}")
     if not callable(factory):
@@ -199,55 +204,131 @@ def load_factory(ref: str, *, base_dir: Path | None = None) -> Callable[[PolicyC
     return factory
 
 
+def source_digest(ref: str, *, base_dir: Path | None = None) -> str:
+    """SHA-256 of a plugin's source, which an experiment's fingerprint includes: the bytes of
+    ``file.py`` for a file reference; for ``MODULE:ATTR`` the module's source file (every ``.py``
+    file of a package, with its relative path). Code the plugin imports from elsewhere is not
+    covered."""
+    module_name, _ = _split(resolve_ref(ref, base_dir))
+    files: list[tuple[str, Path]] = []
+    if _is_path(module_name):
+        files = [("", Path(module_name))]
+    else:
+        spec = guarded(ref, "finding the module", importlib.util.find_spec, module_name)
+        if spec is None:
+            raise PluginError(f"policy {ref!r}: cannot import module {module_name!r}")
+        for location in spec.submodule_search_locations or ():
+            root = Path(location)
+            files += sorted((str(f.relative_to(root)), f) for f in root.rglob("*.py"))
+        if not files and spec.origin is not None and Path(spec.origin).is_file():
+            files = [("", Path(spec.origin))]          # a plain module (or an extension's binary)
+    digest = hashlib.sha256()
+    for name, path in files:
+        try:
+            content = path.read_bytes()
+        except OSError as exc:
+            raise PluginError(f"policy {ref!r}: cannot read {path}: {exc.strerror or exc}") from exc
+        digest.update(f"{name}\0{len(content)}\0".encode())
+        digest.update(content)
+    return digest.hexdigest()
+
+
 def _one_line(exc: BaseException) -> str:
     text = " ".join(str(exc).split())
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def guarded(ref: str, what: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+    """``fn(*args, **kwargs)`` — plugin code — with whatever it raises turned into one
+    :class:`PluginError` line naming the plugin and ``what``: every exception, ``SystemExit``
+    (``sys.exit`` in a plugin) included, except a Ctrl-C (``KeyboardInterrupt``), which stops the
+    run as a Ctrl-C does. A plugin cannot end the run with a success status or without a message
+    this way (``os._exit`` ends the process at once, uncatchable; README "Reliability")."""
+    try:
+        return fn(*args, **kwargs)
+    except (PluginError, KeyboardInterrupt):
+        raise
+    except BaseException as exc:
+        raise PluginError(f"policy {ref!r}: {what} raised {_one_line(exc)}") from exc
+
+
+_MISSING = object()
 
 
 # ---- the adapter the core drives ------------------------------------------------------------------
 class PluginPolicy:
     """A user's policy behind the core's protocol: checks every call and names the plugin.
 
+    The optional members are read and validated once, here; a member that raises when read or
+    holds the wrong kind of value is a one-line :class:`PluginError`.
+
     Attributes
     ----------
     name : the plugin reference as given
     inner : the object the factory returned
     needs_state : from ``inner`` (default False)
-    info : design data for reports and recordings (``inner.info`` if it is a dict)
+    info : design data for reports and recordings (``inner.info``, a dict with string keys)
     select : present only if ``inner`` has one (otherwise the core keeps the whole batch)
+    independent_rows : ``inner``'s promise (default False); True is checked by one deep copy
+    estimator : present only if ``inner`` has one (recordings log its ``x_prior``,
+        ``innovation`` and ``P``)
     """
 
     def __init__(self, name: str, inner: object) -> None:
         self.name = name
         self.inner = inner
         for method in ("reset", "act"):
-            if not callable(getattr(inner, method, None)):
+            if not callable(self._member(method, None)):
                 raise PluginError(f"policy {name!r}: the factory returned {type(inner).__name__}, "
                                   f"which has no {method}() method (expected reset(n) and act(y))")
-        needs = getattr(inner, "needs_state", False)
+        needs = self._member("needs_state", False)
         if not isinstance(needs, bool | np.bool_):
-            raise PluginError(f"policy {name!r}: needs_state must be True or False, got {needs!r}")
+            raise PluginError(f"policy {name!r}: needs_state must be True or False, got "
+                              f"{_short(needs)}")
         self.needs_state = bool(needs)
-        info = getattr(inner, "info", None)
-        self.info: dict[str, Any] = dict(info) if isinstance(info, dict) else {}
-        if callable(getattr(inner, "select", None)):
+        info = self._member("info", None)
+        if info is None:
+            info = {}
+        if not isinstance(info, Mapping):
+            raise PluginError(f"policy {name!r}: info must be a dict of design data (gains, "
+                              f"poles), got {type(info).__name__}")
+        self.info: dict[str, Any] = guarded(name, "reading info", dict, info)
+        if not all(isinstance(k, str) for k in self.info):
+            raise PluginError(f"policy {name!r}: info must have string keys, got "
+                              f"{sorted(map(repr, self.info))[:3]}")
+        select = self._member("select", None)
+        if select is not None:
+            if not callable(select):
+                raise PluginError(f"policy {name!r}: select must be a method select(rows), got "
+                                  f"{type(select).__name__}")
             self.select = self._select
+        rows = self._member("independent_rows", False)
+        if not isinstance(rows, bool | np.bool_):
+            raise PluginError(f"policy {name!r}: independent_rows must be True or False, got "
+                              f"{_short(rows)}")
         #: the plugin's promise that its rows are independent (the core may shard the batch)
-        self.independent_rows = getattr(inner, "independent_rows", False) is True
+        self.independent_rows = bool(rows)
+        if self.independent_rows:
+            copy.deepcopy(self)                     # the promise checked once: it deep-copies
+        est = self._member("estimator", None)
+        if est is not None:
+            self.estimator = _EstimatorView(self, est)
+        self._rows = 0                              # rows of the last act
         params: Mapping[str, Any]
         try:
             params = inspect.signature(inner.reset).parameters    # type: ignore[attr-defined]
-        except (TypeError, ValueError):
+        except (KeyboardInterrupt, PluginError):
+            raise
+        except BaseException:
             params = {}
         self._reset_takes_x_hat0 = "x_hat0" in params
 
+    def _member(self, attr: str, default: object) -> Any:
+        """``inner.attr`` (``default`` if absent); raising when read is a :class:`PluginError`."""
+        return guarded(self.name, f"reading {attr}", getattr, self.inner, attr, default)
+
     def _call(self, what: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
-        try:
-            return fn(*args, **kwargs)
-        except PluginError:
-            raise
-        except Exception as exc:
-            raise PluginError(f"policy {self.name!r}: {what} raised {_one_line(exc)}") from exc
+        return guarded(self.name, what, fn, *args, **kwargs)
 
     def reset(self, n: int, x_hat0: np.ndarray | None = None) -> None:
         """Start ``n`` episodes (``x_hat0`` only for plugins whose ``reset`` takes it)."""
@@ -258,34 +339,99 @@ class PluginPolicy:
         else:
             raise PluginError(f"policy {self.name!r}: estimate0 = 'true' needs "
                               "reset(n, x_hat0=…); this plugin's reset takes only n")
+        self._rows = n
 
     def act(self, y: np.ndarray) -> np.ndarray:
         """Forces (n,) for the rows of ``y``; shape and type checked, non-finite values kept (the
         core ends those episodes as ``diverged``)."""
+        self._rows = y.shape[0]
         return self._check(self._call("act", self.inner.act, y), y.shape[0])  # type: ignore[attr-defined]
 
     def _check(self, u: object, n: int) -> np.ndarray:
-        try:
-            arr = np.asarray(u, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise PluginError(f"policy {self.name!r}: act returned {type(u).__name__}; expected "
-                              f"an array of {n} forces in newtons, shape ({n},)") from exc
+        arr = self._array("act", "forces", u, f"an array of {n} forces in newtons, shape ({n},)")
         if arr.shape not in ((n,), (n, 1)):
             raise PluginError(f"policy {self.name!r}: act returned shape {arr.shape}; expected "
                               f"({n},) forces in newtons")
         return arr.reshape(n)
 
+    def _array(self, member: str, what: str, value: object, expected: str) -> np.ndarray:
+        """``value`` as a real float array; what a plugin returns, converted (``__array__`` of a
+        plugin's object is plugin code too): a complex value or a non-number is refused."""
+        arr = self._call(f"converting {member}", np.asarray, value)
+        if arr.dtype.kind == "c":            # a cast would drop the imaginary part silently
+            raise PluginError(f"policy {self.name!r}: {member} returned complex {what} "
+                              f"{_short(arr.reshape(-1)[:3])}; expected real {what}")
+        try:
+            return np.asarray(arr, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise PluginError(f"policy {self.name!r}: {member} returned "
+                              f"{type(value).__name__}; expected {expected}") from exc
+
     def _select(self, rows: np.ndarray) -> None:
         self._call("select", self.inner.select, rows)                  # type: ignore[attr-defined]
+        self._rows = len(rows)
 
     @property
     def x_hat(self) -> np.ndarray | None:
-        """The plugin's current estimate (n, 4), if it exposes one of that shape."""
-        est = getattr(self.inner, "x_hat", None)
+        """The plugin's current estimate (n, 4), or None; anything else is a :class:`PluginError`."""
+        est = self._member("x_hat", None)
         if est is None:
             return None
-        est = np.asarray(est, dtype=float)
-        return est if est.ndim == 2 and est.shape[1] == 4 else None
+        return self.checked_rows("x_hat", est, (4,))
+
+    def checked_rows(self, member: str, value: object, tail: tuple[int, ...]) -> np.ndarray:
+        """``value`` as a real (n, *tail) array, n the rows of the last ``act``."""
+        want = (self._rows, *tail)
+        arr = self._array(member, "values", value, f"an array of shape {want}")
+        if arr.shape != want:
+            raise PluginError(f"policy {self.name!r}: {member} has shape {arr.shape}; expected "
+                              f"{want} (one row per running episode) or None")
+        return arr
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> PluginPolicy:
+        """A copy for a shard (``independent_rows = True``): the plugin's object deep-copied; what
+        that raises is a one-line :class:`PluginError`."""
+        new = object.__new__(type(self))
+        memo[id(self)] = new
+        state = guarded(self.name, "copy.deepcopy (independent_rows = True promises a working "
+                        "deep copy)", copy.deepcopy, self.__dict__, memo)
+        new.__dict__.update(state)
+        return new
+
+
+class _EstimatorView:
+    """A plugin's ``estimator`` as recordings read it: ``x_prior`` (n, 4), ``innovation`` (n, 2)
+    and ``P`` (4, 4) or (n, 4, 4), each checked when read (absent: not recorded)."""
+
+    def __init__(self, policy: PluginPolicy, estimator: object) -> None:
+        self._policy, self._estimator = policy, estimator
+
+    def _read(self, attr: str, tails: tuple[tuple[int, ...], ...]) -> np.ndarray | None:
+        policy = self._policy
+        value = guarded(policy.name, f"reading estimator.{attr}", getattr, self._estimator, attr,
+                        None)
+        if value is None:
+            return None
+        if len(tails) > 1 and np.shape(value) == tails[0]:
+            return policy._array(f"estimator.{attr}", "values", value, f"shape {tails[0]}")
+        return policy.checked_rows(f"estimator.{attr}", value, tails[-1])
+
+    @property
+    def x_prior(self) -> np.ndarray | None:
+        return self._read("x_prior", ((4,),))
+
+    @property
+    def innovation(self) -> np.ndarray | None:
+        return self._read("innovation", ((2,),))
+
+    @property
+    def P(self) -> np.ndarray | None:
+        return self._read("P", ((4, 4), (4, 4)))
+
+
+def _short(value: object) -> str:
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 # ---- one way to build any policy ------------------------------------------------------------------
@@ -311,13 +457,7 @@ def build_policy(name: str | None, *, plant: Plant, scenario: Scenario,
     if name is not None and is_plugin_ref(name):
         factory = load_factory(name, base_dir=base_dir)
         ctx = context if context is not None else PolicyContext.build(plant, scenario)
-        try:
-            inner = factory(ctx)
-        except PluginError:
-            raise
-        except Exception as exc:
-            raise PluginError(f"policy {name!r}: the factory raised {_one_line(exc)}") from exc
-        return PluginPolicy(name, inner)
+        return PluginPolicy(name, guarded(name, "the factory", factory, ctx))
     if name is not None:
         controller, observer = split_builtin(name)
         spec = dataclasses.replace(spec, controller=controller, observer=observer)

@@ -24,6 +24,7 @@ from pendulum_lqg.core.protocol import Policy, SelectablePolicy
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import episode_generators, episode_seeds
 from pendulum_lqg.core.trajectory import Trajectory, TrajectoryLog, estimator_snapshot
+from pendulum_lqg.errors import PendulumLQGError
 from pendulum_lqg.plant import Plant
 
 
@@ -49,11 +50,13 @@ class _FixedBatch:
         self.policy, self.n0, self.alive = policy, n, np.arange(n)
 
     def act(self, y: np.ndarray) -> np.ndarray:
+        # no cast here: the loop converts the forces and refuses complex ones
+        # (a cast to float would drop their imaginary part)
         if self.alive.size == self.n0:
-            return np.asarray(self.policy.act(y), dtype=np.float64).reshape(-1)
+            return np.asarray(self.policy.act(y)).reshape(-1)
         full = np.zeros((self.n0, y.shape[1]))
         full[self.alive] = y
-        u = np.asarray(self.policy.act(full), dtype=np.float64).reshape(-1)
+        u = np.asarray(self.policy.act(full)).reshape(-1)
         return u[self.alive]
 
     def select(self, rows: np.ndarray) -> None:
@@ -83,6 +86,21 @@ def shard_count(n: int, nthread: int, backend: str, policy: object) -> int:
     if backend != "rollout" or nthread < 2 or getattr(policy, "independent_rows", False) is not True:
         return 1
     return max(1, min(nthread, n // MIN_SHARD_ROWS))
+
+
+def _shard_copy(policy: Policy) -> Policy:
+    """A shard's own copy of ``policy`` (``independent_rows = True`` promises that it deep-copies);
+    a copy that fails is a one-line error, not a traceback from inside ``copy``."""
+    try:
+        return copy.deepcopy(policy)
+    except PendulumLQGError:
+        raise
+    except Exception as exc:
+        text = " ".join(str(exc).split())
+        raise PendulumLQGError(f"policy: independent_rows = True promises that the policy "
+                               f"deep-copies (each thread shard runs a copy), but copy.deepcopy "
+                               f"raised {type(exc).__name__}: {text}; set independent_rows = "
+                               "False or make it copyable") from exc
 
 
 class _Cancelled(Exception):
@@ -122,14 +140,15 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: Policy, *, seed: int,
         return _run_batch(plant, scenario, policy, seed, episodes, backend, nthread, trajectory,
                           initial_states, None, t0)
     parts = np.array_split(np.arange(len(episodes)), shards)
+    copies = [_shard_copy(policy) for _ in parts]        # all made before any shard starts
     stop = threading.Event()
     with ThreadPoolExecutor(max_workers=min(shards, nthread),
                             thread_name_prefix="pendulum-lqg-shard") as pool:
-        futures = [pool.submit(_run_batch, plant, scenario, copy.deepcopy(policy), seed,
+        futures = [pool.submit(_run_batch, plant, scenario, mine, seed,
                                [episodes[i] for i in part], backend, 1, trajectory,
                                None if initial_states is None
                                else np.asarray(initial_states)[part], stop, t0)
-                   for part in parts]
+                   for part, mine in zip(parts, copies, strict=True)]
         try:
             results = [f.result() for f in futures]
         except BaseException:
