@@ -31,10 +31,6 @@ EST_STATES = (("rms_est_err_p", "p [m]"), ("rms_est_err_theta", "θ [rad]"),
               ("rms_est_err_p_dot", "ṗ [m/s]"), ("rms_est_err_theta_dot", "θ̇ [rad/s]"))
 
 
-def _series_label(row: dict[str, Any], keys: list[str]) -> str:
-    return " ".join(str(row[k]) for k in keys)
-
-
 def _group(rows: list[dict[str, Any]], keys: list[str]) -> dict[tuple, list[dict[str, Any]]]:
     out: dict[tuple, list[dict[str, Any]]] = {}
     for r in rows:

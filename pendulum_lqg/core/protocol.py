@@ -50,13 +50,3 @@ class SelectablePolicy(Policy, Protocol):
     def select(self, rows: np.ndarray) -> None:
         """Keep only ``rows`` (indices into the current batch, in order)."""
         ...
-
-
-class EstimatingPolicy(Policy, Protocol):
-    """A policy that exposes the estimate it acted on (the estimation-error metrics)."""
-
-    @property
-    def x_hat(self) -> np.ndarray | None:
-        """(n, 4) the estimate ``x̂[n]`` the last :meth:`act` used; read right after it."""
-        ...
-
