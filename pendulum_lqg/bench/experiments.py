@@ -154,12 +154,18 @@ class Configuration:
         return nominal, simulated
 
     def validate(self) -> None:
-        """Build the configuration and check it against the (possibly overridden) model."""
+        """Build the configuration, check it against the (possibly overridden) model and design
+        its built-in policy (once per distinct design), so that a design that fails — a Kalman
+        filter on a singular ``measurement_variance``, say — stops the parse, not the sweep."""
         from pendulum_lqg.plant import steps_per_period
+        from pendulum_lqg.policy import delay_periods
 
-        scenario, _ = self.build()          # the Scenario checks the duration ceiling
+        scenario, spec = self.build()       # the Scenario checks the duration ceiling
         steps_per_period(_simulated_plant(self.model_file, scenario.overrides),
                          scenario.control_period)
+        if self.plugin is None:             # a plugin's factory runs with its units only
+            _designed(self.model_file, scenario.control_period, scenario.noise.with_scale(1.0),
+                      spec, delay_periods(scenario))
 
 
 @functools.lru_cache(maxsize=32)
@@ -169,6 +175,21 @@ def _simulated_plant(model_file: str | None, overrides: ModelOverrides) -> Plant
     from pendulum_lqg.plant import load_plant
 
     return load_plant(model_file, overrides=overrides)
+
+
+@functools.lru_cache(maxsize=256)
+def _designed(model_file: str | None, control_period: float, noise: NoiseModel,
+              spec: DesignSpec, delays: tuple[int, int]) -> None:
+    """Design a configuration's built-in policy on the nominal plant (the design ignores the
+    noise scale; a grid over noise, model scales or policies repeats few designs)."""
+    from pendulum_lqg.policy import design_policy
+
+    design_policy(_simulated_plant(model_file, ModelOverrides()), control_period, noise, spec,
+                  delays=delays)
+
+
+#: Names the designs give their data, and the experiment keys those come from.
+DESIGN_NAMES = {"V": "noise.measurement_variance", "W": "noise.process_density"}
 
 
 @dataclass(frozen=True)
@@ -186,6 +207,14 @@ class ExperimentSpec:
     study_params: dict[str, Any] = field(default_factory=dict)
     #: folder of the experiment file (relative plugin paths), not part of the fingerprint
     base_dir: Path | None = None
+    #: SHA-256 of each plugin's source (:func:`~pendulum_lqg.plugins.source_digest`), by plugin
+    #: reference; read when the spec is parsed, so it describes the code that was imported
+    plugin_sources: dict[str, str] = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        check_rows(self.episodes, len(self.configurations))
+        for cfg in self.configurations:
+            self.plugin_source(cfg)
 
     def with_overrides(self, *, episodes: int | None = None, seed: int | None = None,
                        model_file: str | None = None) -> ExperimentSpec:
@@ -193,14 +222,8 @@ class ExperimentSpec:
         (a model path given here is taken from the current folder)."""
         if episodes is None and seed is None and model_file is None:
             return self                     # nothing to change: no second validation
-        src = dict(self.source)
-        if episodes is not None:
-            src["episodes"] = episodes
-        if seed is not None:
-            src["seed"] = seed
-        if model_file is not None:
-            src["model_file"] = str(Path(model_file).resolve())
-        return parse_spec(src, name=self.name, base_dir=self.base_dir)
+        return parse_spec(_overridden(self.source, episodes, seed, model_file), name=self.name,
+                          base_dir=self.base_dir)
 
     def units(self) -> list[WorkUnit]:
         out = []
@@ -211,13 +234,34 @@ class ExperimentSpec:
         return out
 
     def fingerprint(self) -> str:
-        """Hash of the resolved spec (and of a custom model file's bytes): a resumed sweep must
-        have the same one."""
+        """Hash of everything that makes the rows: the resolved spec, a custom model file's bytes
+        and each plugin's source. Two specs with the same fingerprint compute the same rows."""
+        sources = sorted({d for d in self.plugin_sources.values()})
+        if not sources:
+            return self.definition_fingerprint()
+        blob = self.definition_fingerprint().encode() + "".join(sources).encode()
+        return hashlib.sha256(blob).hexdigest()[:16]
+
+    def definition_fingerprint(self) -> str:
+        """Hash of the resolved spec and of a custom model file's bytes, without the plugins'
+        sources: a resumed sweep must have the same one (the units whose plugin changed since
+        are then stale, see :meth:`plugin_source`)."""
         blob = json.dumps(self.source, sort_keys=True, default=str).encode()
         model = self.configurations[0].model_file if self.configurations else None
         if model is not None:
             blob += Path(model).read_bytes()
         return hashlib.sha256(blob).hexdigest()[:16]
+
+    def plugin_source(self, cfg: Configuration) -> str | None:
+        """SHA-256 of ``cfg``'s plugin source (``None`` for a built-in policy): a unit written
+        with another one is stale."""
+        if cfg.plugin is None:
+            return None
+        if cfg.plugin not in self.plugin_sources:
+            from pendulum_lqg.plugins import source_digest
+
+            self.plugin_sources[cfg.plugin] = source_digest(cfg.plugin)
+        return self.plugin_sources[cfg.plugin]
 
 
 @dataclass(frozen=True)
@@ -242,6 +286,28 @@ class WorkUnit:
         d = json.loads(text)
         return cls(config=Configuration(**d["config"]), seed=d["seed"], start=d["start"],
                    stop=d["stop"])
+
+
+def _overridden(data: dict[str, Any], episodes: int | None, seed: int | None,
+                model_file: str | None) -> dict[str, Any]:
+    """``data`` with the command line's ``--episodes`` / ``--seed`` / ``--model`` (a model path
+    given there is taken from the current folder)."""
+    src = dict(data)
+    if episodes is not None:
+        src["episodes"] = episodes
+    if seed is not None:
+        src["seed"] = seed
+    if model_file is not None:
+        src["model_file"] = str(Path(model_file).resolve())
+    return src
+
+
+def check_rows(episodes: int, configurations: int) -> None:
+    """The ceiling of an experiment's rows (:data:`~pendulum_lqg.limits.MAX_BENCH_ROWS`)."""
+    from pendulum_lqg.limits import MAX_BENCH_ROWS, check_at_most
+
+    check_at_most("episodes × configurations", episodes * configurations, MAX_BENCH_ROWS,
+                  "the summary holds every row of the experiment in memory")
 
 
 def _as_int(where: str, value: object, minimum: int) -> int:
@@ -316,7 +382,9 @@ def _located(exc: PendulumLQGError, base: dict[str, dict[str, Any]],
     was given in ``[design]`` (and not by the grid), plus the grid point that failed."""
     msg = str(exc)
     name = msg.split(":", 1)[0]
-    if name not in values:
+    if name in DESIGN_NAMES:                 # a design's V or W: the noise key it came from
+        msg = f"{DESIGN_NAMES[name]} ({name}){msg[len(name):]}"
+    elif name not in values:
         for table, entries in base.items():
             if name in entries:
                 msg = f"{table}.{msg}"
@@ -380,8 +448,10 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     keys = list(grid)
     from pendulum_lqg.limits import MAX_CONFIGURATIONS, check_at_most
 
-    check_at_most("grid", math.prod(len(grid[k]) for k in keys), MAX_CONFIGURATIONS,
+    n_configs = math.prod(len(grid[k]) for k in keys)
+    check_at_most("grid", n_configs, MAX_CONFIGURATIONS,
                   "configurations, each validated before the first unit runs")
+    check_rows(episodes, n_configs)             # before validating them
     configs = []
     combos = itertools.product(*[grid[k] for k in keys]) if keys else [()]
     for i, combo in enumerate(combos):
@@ -400,11 +470,14 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
         study=None if study is None else str(study), study_params=study_params, base_dir=base_dir)
 
 
-def load_spec(name_or_path: str) -> ExperimentSpec:
+def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | None = None,
+              model_file: str | None = None) -> ExperimentSpec:
     """Load a shipped experiment by name (``lecture``) or a TOML file by path.
 
     A bare name (no suffix, no folder) is looked up among the shipped experiments first, then as
-    ``NAME.toml`` in the current folder; anything else is a path.
+    ``NAME.toml`` in the current folder; anything else is a path. ``episodes``, ``seed`` and
+    ``model_file`` replace the file's (``bench --episodes/--seed/--model``; as
+    :meth:`ExperimentSpec.with_overrides`, but the file is validated once, with them).
     """
     from pendulum_lqg.resources import experiment_names, experiment_path
 
@@ -431,7 +504,8 @@ def load_spec(name_or_path: str) -> ExperimentSpec:
         raise ConfigError(f"experiment: {path} is not valid TOML: "
                           f"{' '.join(str(exc).split())}") from exc
     try:
-        return parse_spec(data, name=path.stem, base_dir=path.resolve().parent)
+        return parse_spec(_overridden(data, episodes, seed, model_file), name=path.stem,
+                          base_dir=path.resolve().parent)
     except PendulumLQGError as exc:       # every message names the file it came from
         raise type(exc)(f"{exc} (in {path})") from exc
 

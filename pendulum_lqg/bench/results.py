@@ -6,9 +6,11 @@ Layout of a results folder::
                      pendulum_lqg and the libraries that compute the numbers; its presence marks
                      the folder as ours (``--force`` empties no other folder)
     units/KEY.csv    one file per finished work unit (written to a temp file, then renamed)
-    units/KEY.json   the unit's check record: fingerprint, configuration, episode range, row
-                     count, columns and the SHA-256 of the CSV's bytes — a resume trusts a unit
-                     only if all of them match (otherwise it is recomputed, or refused)
+    units/KEY.json   the unit's check record: fingerprint, its plugin's source digest,
+                     configuration, episode range, row count, columns and the SHA-256 of the
+                     CSV's bytes — a resume trusts a unit only if all of them match and the CSV's
+                     own ``config``, ``episode`` and ``seed`` columns are the unit's (otherwise it
+                     is recomputed, or refused)
     episodes.csv     every episode row with its configuration (assembled at the end); first
                      column ``schema_version``
     summary.json     aggregates per configuration (success rate + Wilson CI, mean ± SE), with
@@ -82,7 +84,8 @@ class ResultsDir:
         self.units_dir = self.path / "units"
         self.lock = self.path / ".lock"
         self._locked = False
-        self._fingerprint: str | None = None       # set by prepare(); enters the check records
+        self._spec: ExperimentSpec | None = None    # set by prepare(); its fingerprints enter
+                                                    # the check records
 
     def prepare(self, spec: ExperimentSpec, *, force: bool = False, resume: bool = False,
                 allow_version_change: bool = False) -> None:
@@ -116,14 +119,17 @@ class ResultsDir:
             self._acquire()
         except PermissionError as exc:
             raise ConfigError(f"out: cannot write into {self.path} ({exc.strerror})") from None
-        record: dict[str, Any] = {"fingerprint": spec.fingerprint(), "name": spec.name,
-                                  "spec": spec.source, "versions": versions()}
+        record: dict[str, Any] = {"fingerprint": spec.fingerprint(),
+                                  "definition": spec.definition_fingerprint(), "name": spec.name,
+                                  "spec": spec.source, "plugin_sources": spec.plugin_sources,
+                                  "versions": versions()}
         if resume and old is not None:
             problem = None
-            if old.get("fingerprint") != record["fingerprint"]:
+            # a folder written before plugin sources were fingerprinted has no "definition"
+            if old.get("definition", old.get("fingerprint")) != record["definition"]:
                 problem = (f"holds a different experiment ({old.get('name')}, fingerprint "
-                           f"{old.get('fingerprint')}); use the same file, --episodes and --seed, "
-                           "or --force")
+                           f"{old.get('fingerprint')}); use the same file, model, --episodes and "
+                           "--seed, or --force")
             elif old.get("versions", {}) != record["versions"] and not allow_version_change:
                 problem = (f"was written by {_describe(old.get('versions', {}))}, this is "
                            f"{_describe(record['versions'])}; finish it with the same versions, "
@@ -137,14 +143,14 @@ class ResultsDir:
                     continue
                 shutil.rmtree(child) if child.is_dir() else child.unlink()
         self.units_dir.mkdir(exist_ok=True)
-        self._fingerprint = record["fingerprint"]
+        self._spec = spec
         atomic_write(spec_file, json.dumps(record, indent=2, sort_keys=True, default=str) + "\n")
 
     def _read_spec(self) -> dict[str, Any] | None:
         """Our ``spec.json`` as a dict, or ``None`` if missing or not ours."""
         try:
             data = json.loads((self.path / "spec.json").read_text(encoding="utf-8"))
-        except (OSError, ValueError):
+        except (OSError, ValueError, RecursionError):
             return None
         return data if isinstance(data, dict) and "fingerprint" in data else None
 
@@ -187,46 +193,56 @@ class ResultsDir:
         configuration, episode range, row count, columns, SHA-256). Each unit on disk that does
         not is reported to ``on_mismatch(key, reason)`` and left out (so it is recomputed)."""
         present = self.done()
-        fingerprint = spec.fingerprint()
         ok = set()
         for unit in spec.units():
             if unit.key not in present:
                 continue
-            reason = self._check_unit(unit, fingerprint)
+            reason = self._check_unit(unit, spec)
             if reason is None:
                 ok.add(unit.key)
             elif on_mismatch is not None:
                 on_mismatch(unit.key, reason)
         return ok
 
-    def _check_unit(self, unit: WorkUnit, fingerprint: str) -> str | None:
+    def _check_unit(self, unit: WorkUnit, spec: ExperimentSpec) -> str | None:
+        """Why the files of ``unit`` cannot be trusted, or ``None`` if they can."""
         csv_file = self.units_dir / f"{unit.key}.csv"
         try:
             data = csv_file.read_bytes()
-            record = json.loads((self.units_dir / f"{unit.key}.json").read_text(encoding="utf-8"))
+            text = (self.units_dir / f"{unit.key}.json").read_text(encoding="utf-8")
         except FileNotFoundError:
             return "no check record (written by an older version or cut short)"
         except (OSError, ValueError) as exc:
             return f"unreadable ({exc.__class__.__name__})"
-        if not isinstance(record, dict):
-            return "check record is not a JSON object"
-        actual = _unit_record(unit, fingerprint, data)
+        try:
+            record = json.loads(text)
+        except (ValueError, RecursionError) as exc:         # RecursionError: nested too deep
+            return f"check record corrupt (not JSON: {type(exc).__name__})"
+        shape = _record_shape_problem(record)
+        if shape is not None:
+            return f"check record corrupt ({shape})"
+        actual = _unit_record(unit, spec, data)
         expected = {**actual, "rows": unit.stop - unit.start, "columns": unit_columns(unit)}
         for field in ("rows", "columns"):
             if actual[field] != expected[field]:
                 return f"{field}: found {actual[field]!r}, expected {expected[field]!r}"
-        if record.get("sha256") != actual["sha256"]:
+        if record["sha256"] != actual["sha256"]:
             return "its CSV was changed after it was written (SHA-256 differs)"
+        if record.get("plugin_source") != expected.get("plugin_source"):
+            return (f"written by another version of the plugin {unit.config.plugin} (its source "
+                    "changed since)")
         for field in ("fingerprint", "config", "start", "stop", "rows", "columns"):
-            if record.get(field) != expected[field]:
-                return f"{field}: recorded {record.get(field)!r}, expected {expected[field]!r}"
-        return None
+            if record[field] != expected[field]:
+                return f"{field}: recorded {record[field]!r}, expected {expected[field]!r}"
+        return _content_problem(unit, data)
 
     def write_unit(self, unit: WorkUnit, rows: list[dict[str, Any]]) -> None:
         """Write a unit's rows and then its check record (a unit without one is not trusted)."""
+        if self._spec is None:
+            raise ConfigError("write_unit: prepare() the results folder first")
         text = rows_to_csv(rows)
         atomic_write(self.units_dir / f"{unit.key}.csv", text)
-        record = _unit_record(unit, self._fingerprint, text.encode("utf-8"))
+        record = _unit_record(unit, self._spec, text.encode("utf-8"))
         atomic_write(self.units_dir / f"{unit.key}.json", json.dumps(record, sort_keys=True) + "\n")
 
     def collect(self, spec: ExperimentSpec) -> list[dict[str, Any]]:
@@ -256,13 +272,62 @@ def unit_columns(unit: WorkUnit) -> list[str]:
     return ["config", *unit.config.values, *EPISODE_FIELDS]
 
 
-def _unit_record(unit: WorkUnit, fingerprint: str | None, data: bytes) -> dict[str, Any]:
+def _unit_record(unit: WorkUnit, spec: ExperimentSpec, data: bytes) -> dict[str, Any]:
+    """The check record of ``unit`` whose CSV is ``data``: the experiment's definition
+    fingerprint, the unit's plugin source digest, its configuration and range, and the CSV's
+    SHA-256, row count and header."""
     text = data.decode("utf-8", errors="replace")
     lines = text.splitlines()
     header = next(csv.reader(lines[:1]), []) if lines else []
-    return {"fingerprint": fingerprint, "config": unit.config.index, "start": unit.start,
-            "stop": unit.stop, "sha256": hashlib.sha256(data).hexdigest(),
-            "rows": max(len(lines) - 1, 0), "columns": header if lines else []}
+    record = {"fingerprint": spec.definition_fingerprint(), "config": unit.config.index,
+              "start": unit.start, "stop": unit.stop, "sha256": hashlib.sha256(data).hexdigest(),
+              "rows": max(len(lines) - 1, 0), "columns": header if lines else []}
+    source = spec.plugin_source(unit.config)
+    if source is not None:                     # (records of built-in policies stay as they were)
+        record["plugin_source"] = source
+    return record
+
+
+#: The fields of a unit's check record and their JSON types (``plugin_source`` is optional).
+RECORD_FIELDS: dict[str, type | tuple[type, ...]] = {
+    "fingerprint": str, "config": int, "start": int, "stop": int, "sha256": str, "rows": int,
+    "columns": list}
+
+
+def _record_shape_problem(record: object) -> str | None:
+    """What is wrong with the shape of a parsed check record (``None``: nothing)."""
+    if not isinstance(record, dict):
+        return f"a JSON {type(record).__name__}, expected an object"
+    for key, kind in RECORD_FIELDS.items():
+        value = record.get(key)
+        if not isinstance(value, kind) or isinstance(value, bool):
+            return f"{key}: expected a {getattr(kind, '__name__', kind)}, got {type(value).__name__}"
+    if not all(isinstance(c, str) for c in record["columns"]):
+        return "columns: expected a list of names"
+    if not isinstance(record.get("plugin_source", ""), str):
+        return "plugin_source: expected a string"
+    return None
+
+
+def _content_problem(unit: WorkUnit, data: bytes) -> str | None:
+    """Whether the CSV's own ``config``, ``episode`` and ``seed`` columns are ``unit``'s: a unit
+    file swapped or edited with a recomputed SHA-256 in its record is caught here."""
+    from pendulum_lqg.core.seeding import episode_seeds
+
+    rows = list(csv.reader(data.decode("utf-8", errors="replace").splitlines()))
+    header, body = rows[0], rows[1:]
+    episodes = list(range(unit.start, unit.stop))
+    wanted = {"config": [str(unit.config.index)] * len(episodes),
+              "episode": [str(e) for e in episodes],
+              "seed": [str(s) for s in episode_seeds(unit.seed, episodes)]}
+    for column, values in wanted.items():
+        i = header.index(column)
+        found = [r[i] if i < len(r) else "" for r in body]
+        if found != values:
+            k = next(j for j, (a, b) in enumerate(zip(found, values, strict=True)) if a != b)
+            return (f"its CSV holds other episodes: row {k + 1} has {column} {found[k]!r}, "
+                    f"expected {values[k]!r}")
+    return None
 
 
 def _describe(v: dict[str, str]) -> str:
