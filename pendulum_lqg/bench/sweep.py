@@ -34,7 +34,6 @@ from typing import TYPE_CHECKING, Any
 from pendulum_lqg.bench.experiments import ExperimentSpec, WorkUnit
 from pendulum_lqg.bench.results import ResultsDir, versions
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.limits import MAX_BENCH_ROWS, check_at_most
 
 if TYPE_CHECKING:
     from pendulum_lqg.bench.executors import Executor
@@ -117,13 +116,13 @@ def run_sweep(spec: ExperimentSpec, out: str | Path | ResultsDir, *,
     if spec.study is not None:
         raise ConfigError(f"experiment: {spec.name} is a {spec.study} study; run it with "
                           "pendulum_lqg.analysis.studies.run_study")
+    if record is not None and not str(record).strip():
+        raise ConfigError(f"--record: expected a folder for the recordings, got {str(record)!r}")
     if record is not None and Path(record).exists() and not Path(record).is_dir():
         raise ConfigError(f"--record: {record} is a file; expected a folder for the recordings "
                           "(it is created if missing)")
     if on_mismatch not in ("recompute", "refuse"):
         raise ConfigError(f"on_mismatch: expected 'recompute' or 'refuse', got {on_mismatch!r}")
-    check_at_most("episodes × configurations", spec.episodes * len(spec.configurations),
-                  MAX_BENCH_ROWS, "the summary holds every row of the experiment in memory")
     folder = out if isinstance(out, ResultsDir) else ResultsDir(out)
     folder.prepare(spec, force=force, resume=resume, allow_version_change=allow_version_change)
     units = spec.units()

@@ -20,7 +20,8 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     if args.policy is not None and (args.controller or args.observer):
         raise cfg_error("--policy: give either --policy or --controller/--observer, not both")
-    name = args.policy or f"{args.controller or 'dlqr'}+{args.observer or 'kalman'}"
+    name = (args.policy if args.policy is not None   # --policy '' is refused, not the default
+            else f"{args.controller or 'dlqr'}+{args.observer or 'kalman'}")
     plant = load_plant(args.model)
     noise = noise_from_args(args, scale=args.noise_scale)
     scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,
@@ -39,6 +40,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     if recording:
         check_at_most("--episodes", args.episodes, MAX_RECORDED_EPISODES,
                       "episodes recorded with --record/--spawn, whose trajectories are kept")
+        from pendulum_lqg.record.writer import recording_path
+
+        recording_path(args.record if args.record is not None else DEFAULT_RECORDING)
     res = _run_in_batches(plant, scenario, policy, args, trajectory=recording)
     summary = summarize(res.rows)
     config = {"policy": policy.name, "seed": args.seed, "episodes": args.episodes,
@@ -176,8 +180,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from pendulum_lqg.bench.results import ResultsDir
     from pendulum_lqg.bench.sweep import SweepInterrupted, run_sweep
 
-    spec = load_spec(args.experiment).with_overrides(episodes=args.episodes, seed=args.seed,
-                                                     model_file=args.model)
+    spec = load_spec(args.experiment, episodes=args.episodes, seed=args.seed,
+                     model_file=args.model)
     out = ResultsDir(args.out or Path("results") / spec.name)
     log = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
     if spec.study is not None:

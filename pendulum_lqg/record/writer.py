@@ -56,6 +56,20 @@ VIEWER_WAIT = 5.0
 VIEWER_PORT = 9876
 
 
+def recording_path(path: str | Path) -> Path:
+    """``path`` as the ``.rrd`` file a recording is written to; an empty name or an existing
+    folder is a one-line :class:`ConfigError` (before any episode runs, when a caller checks
+    first), not an error of Rerun's after the run."""
+    if not str(path).strip():
+        raise ConfigError(f"record: expected a file path for the recording (FILE.rrd), got "
+                          f"{str(path)!r}")
+    out = Path(path)
+    if out.is_dir():
+        raise ConfigError(f"record: {out} is a folder; expected a file path for the recording, "
+                          f"e.g. {out / 'recording.rrd'}")
+    return out
+
+
 def _start_viewer(rec: Any) -> tuple[bool, str | None]:
     """Spawn a native Rerun viewer and wait (at most :data:`VIEWER_WAIT` s) until it listens.
 
@@ -402,7 +416,7 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
     blueprint = _blueprint(prefixes, estimated=estimated, covariance=covariance, eye=eye(plant))
 
     rec = rr.RecordingStream(application_id)
-    out_path = Path(path) if path is not None else None
+    out_path = recording_path(path) if path is not None else None
     if out_path is not None:
         out_path.parent.mkdir(parents=True, exist_ok=True)
     viewer_note: str | None = None

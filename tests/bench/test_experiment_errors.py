@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 from conftest import assert_one_line_error, run_cli
 
@@ -68,3 +70,32 @@ def test_wrong_types_at_any_level_raise_one_line_config_errors():
 
 
 # ---- 4. models -----------------------------------------------------------------------------------
+
+
+# ---- 5. messages that lost their key or their file -------------------------------------------------
+@pytest.mark.parametrize(("content", "message"), [
+    (b'[noise]\nmeasurement_variance = [0, 0]\n[grid]\npolicy = ["dlqr+luenberger", '
+     b'"dlqr+kalman"]\n', "noise.measurement_variance (V): must be positive definite; smallest "
+     "eigenvalue 0 (grid point policy='dlqr+kalman')"),
+    (b"episodes = 100000000000000000\n", "episodes × configurations: at most 2,000,000 (the "
+     "summary holds every row of the experiment in memory), got 100,000,000,000,000,000"),
+])
+def test_design_and_size_errors_name_the_key_and_the_file_before_any_unit_runs(
+        tmp_path, capsys, content, message):
+    path = tmp_path / "named.toml"
+    path.write_bytes(content)
+    status, err = run_cli(capsys, ["bench", str(path), "--out", str(tmp_path / "o")])
+    assert_one_line_error(status, err, message)
+    assert err.strip().endswith(f"(in {path})"), err
+    assert not (tmp_path / "o").exists()                 # not even the luenberger unit
+
+
+def test_a_file_too_large_for_the_ceiling_runs_with_fewer_episodes_from_the_command_line(
+        tmp_path, capsys):
+    path = tmp_path / "big.toml"
+    path.write_text('name = "big"\nepisodes = 10000000\n[scenario]\nduration = 0.1\n')
+    status, _ = run_cli(capsys, ["bench", str(path), "--episodes", "2", "--quiet",
+                                 "--out", str(tmp_path / "o")])
+    assert status == 0
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())[
+        "episodes_per_config"] == 2

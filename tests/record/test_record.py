@@ -352,6 +352,11 @@ def test_bad_arguments(plant, scenario, kalman, tmp_path):
     with pytest.raises(ConfigError, match="at least one"):
         record_episodes([], plant=plant, scenario=scenario, policy=policy, config={},
                         path=tmp_path / "x.rrd")
+    with pytest.raises(ConfigError, match=r"^record: .* is a folder; expected a file path"):
+        record_episodes([tr], plant=plant, scenario=scenario, policy=policy, config={},
+                        path=tmp_path)
+    with pytest.raises(ConfigError, match=r"^record: expected a file path .*got ''$"):
+        record_episodes([tr], plant=plant, scenario=scenario, policy=policy, config={}, path="")
 
 
 # ---- speed and cost when off ------------------------------------------------------------------
