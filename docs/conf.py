@@ -69,7 +69,9 @@ html_static_path: list[str] = []
 #   line: numpydoc has no place for it, so it is put under a "Notes" heading.
 #
 # * an absolute value written ``|x|`` in prose: reStructuredText reads ``|x|`` as a substitution
-#   (the package defines none); the hook escapes the bars outside inline literals and roles.
+#   (the package defines none); the hook escapes the bars outside inline literals and roles. So
+#   too a star-argument in a shape or call written in prose, ``(n, *tail)``, which would open an
+#   emphasis: a ``*`` after ``(`` or ``, `` with no closing ``*`` on the line.
 # * an attribute comment ``#: h·[diag(Q), R]: the cost of …``: napoleon takes the text before the
 #   first colon of an attribute's docstring as its type. The package's attribute comments are
 #   prose (the annotation gives the type), so the hook keeps them as written: it puts back, after
@@ -124,9 +126,13 @@ def _numpydoc_fields(lines: list[str]) -> list[str]:
 _LITERAL_OR_ROLE = re.compile(r"(``.+?``|:\w+:`[^`]*`|`[^`]*`_?)")
 
 
+_STAR_ARGUMENT = re.compile(r"(?:(?<=\()|(?<=, ))\*(?=[A-Za-z_])(?![^*]*\*)")
+
+
 def _escape_bars(line: str) -> str:
     parts = _LITERAL_OR_ROLE.split(line)
-    return "".join(p if i % 2 else p.replace("|", "\\|") for i, p in enumerate(parts))
+    return "".join(p if i % 2 else _STAR_ARGUMENT.sub(r"\\*", p.replace("|", "\\|"))
+                   for i, p in enumerate(parts))
 
 
 def _process_docstring(app, what, name, obj, options, lines):  # noqa: ARG001 - Sphinx's signature
