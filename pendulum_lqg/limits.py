@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pendulum_lqg.errors import ConfigError
+from pendulum_lqg._config import positive_number
+from pendulum_lqg.errors import ConfigError, PendulumLQGError
 
 #: ``run`` keeps every episode row in memory (and prints them with ``--json``); larger studies go
 #: through ``bench``, which streams them to disk unit by unit.
@@ -26,6 +27,19 @@ MAX_CONFIGURATIONS = 100_000
 MAX_MAP_POINTS = 40_000
 #: Frequencies of a margins study's grid and points of a stored Nyquist curve.
 MAX_FREQUENCIES = 100_000
+#: Sub-environments of one vector env (``gymnasium.make_vec(…, num_envs=N)``): each is a row of
+#: every array of the batched core — a MuJoCo simulation, its noise block, its generator.
+MAX_NUM_ENVS = 100_000
+#: Alternating bare-physics / closed-loop pairs of one ``perf`` run (each pair runs the whole batch
+#: three times).
+MAX_PERF_REPEATS = 100
+#: Physics steps of one ``perf`` batch (episodes × steps per episode): the bare-physics baselines
+#: hold a force for every step of every episode, and the reference rollout with outputs its
+#: state and sensor data as well (eight floats a step for the shipped model).
+MAX_PERF_STEPS = 10**7
+#: Floats the finite-horizon Riccati sweep keeps: ``P`` is (horizon + 1) × n × n (and ``K``
+#: horizon × m × n beside it), all in memory.
+MAX_RICCATI_FLOATS = 2 * 10**7
 #: Episodes ``run`` steps together: bounded so memory does not grow with ``--episodes`` and long
 #: runs report progress between batches (results do not depend on the batching).
 RUN_BATCH = 1024
@@ -33,16 +47,20 @@ RUN_BATCH = 1024
 PROGRESS_EVERY_S = 2.0
 
 
-def check_at_most(where: str, value: int, ceiling: int, why: str) -> int:
-    """``value`` if ≤ ``ceiling``; else a one-line error naming ``where`` and saying ``why``."""
+def check_at_most(where: str, value: int, ceiling: int, why: str, *,
+                  error: type[PendulumLQGError] = ConfigError) -> int:
+    """``value`` if ≤ ``ceiling``; else a one-line ``error`` naming ``where`` and saying ``why``."""
     if value > ceiling:
-        raise ConfigError(f"{where}: at most {ceiling:,} ({why}), got {value:,}")
+        raise error(f"{where}: at most {ceiling:,} ({why}), got {value:,}")
     return value
 
 
 #: Ceiling of the control period T [s]. The cart-pole's unstable pole (≈ 4 rad/s) grows by e⁴ over
 #: one second; far longer periods overflow the designs (e^{AT}) and mean nothing for this problem.
 MAX_CONTROL_PERIOD = 1.0
+#: Floor of the control period T [s]: a megahertz sampled controller. Below it no episode of a
+#: useful length fits in :data:`MAX_PERIODS` periods (at the floor one may last 100 s).
+MIN_CONTROL_PERIOD = 1e-6
 #: Ceiling of the physics steps per control period (bounds the per-period work of the loop and of
 #: the composed ``mjd_transitionFD``, whatever the model's timestep).
 MAX_STEPS_PER_PERIOD = 10_000
@@ -52,6 +70,20 @@ MAX_PERIODS = 10**8
 #: Ceiling of a measurement or actuator delay in control periods (a ring buffer of that many slots
 #: per episode).
 MAX_DELAY_PERIODS = 10_000
+
+
+def check_control_period(control_period: object) -> float:
+    """``control_period`` [s] as a float within [:data:`MIN_CONTROL_PERIOD`,
+    :data:`MAX_CONTROL_PERIOD`]; otherwise a one-line :class:`ConfigError` naming
+    ``control_period`` (checked before the duration, which is counted in periods)."""
+    T = positive_number("control_period", control_period)
+    if T > MAX_CONTROL_PERIOD * (1 + 1e-12):
+        raise ConfigError(f"control_period: expected at most {MAX_CONTROL_PERIOD:g} s (the "
+                          f"ceiling), got {control_period!r} s")
+    if T < MIN_CONTROL_PERIOD * (1 - 1e-12):
+        raise ConfigError(f"control_period: expected at least {MIN_CONTROL_PERIOD:g} s (the "
+                          f"floor), got {control_period!r} s")
+    return T
 
 
 def check_duration(duration: float, control_period: float) -> float:

@@ -21,7 +21,7 @@ import numpy as np
 
 from pendulum_lqg._config import check_keys, positive_number
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.limits import MAX_CONTROL_PERIOD, MAX_STEPS_PER_PERIOD
+from pendulum_lqg.limits import MAX_STEPS_PER_PERIOD, check_control_period
 
 STATE_NAMES: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")
 OUTPUT_NAMES: tuple[str, ...] = ("p", "theta")
@@ -254,10 +254,18 @@ class Plant:
         self._check_contract()
 
     def _check_contract(self) -> None:
-        """The rest of the model contract (README, "Your own cart-pole model"): joint kinds, a
-        limited track, a limited motor on the slider, the two position sensors. Without these
-        checks a missing ``range`` or ``ctrlrange`` read as a 0 m track or a 0 N motor."""
+        """The rest of the model contract (README, "Your own cart-pole model"): a finite positive
+        timestep and finite gravity, joint kinds, a limited track, a limited motor on the slider,
+        the two position sensors. Without these checks a missing ``range`` or ``ctrlrange`` read
+        as a 0 m track or a 0 N motor, and a zero or nan timestep failed deep in the timing."""
         m, path = self.model, self.path
+        h = float(m.opt.timestep)
+        if not (np.isfinite(h) and h > 0):
+            raise ConfigError(f"model: {path}: <option timestep> must be a finite positive number "
+                              f"of seconds, found {h!r}")
+        if not np.all(np.isfinite(m.opt.gravity)):
+            raise ConfigError(f"model: {path}: <option gravity> must be finite, found "
+                              f"{m.opt.gravity.tolist()!r}")
         jt = mujoco.mjtJoint
         slider, hinge = m.joint(SLIDER).id, m.joint(HINGE).id
         for jid, name, kind, word in ((slider, SLIDER, jt.mjJNT_SLIDE, "slide"),
@@ -428,14 +436,12 @@ def steps_per_period(plant: Plant, dt: float) -> int:
     simulation core imports no design code).
 
     ``dt`` must be a whole number k of physics steps h with ``1 ≤ k ≤``
-    :data:`MAX_STEPS_PER_PERIOD` and ``dt ≤`` :data:`MAX_CONTROL_PERIOD`; otherwise a one-line
-    :class:`ConfigError` naming ``control_period``.
+    :data:`MAX_STEPS_PER_PERIOD` and ``dt`` within the bounds of
+    :func:`~pendulum_lqg.limits.check_control_period`; otherwise a one-line :class:`ConfigError`
+    naming ``control_period``.
     """
-    dt = positive_number("control_period", dt)
+    dt = check_control_period(dt)
     h = plant.timestep
-    if dt > MAX_CONTROL_PERIOD * (1 + 1e-12):
-        raise ConfigError(f"control_period: expected at most {MAX_CONTROL_PERIOD:g} s (the "
-                          f"ceiling), got {dt!r} s")
     k = round(dt / h)
     if k < 1 or abs(k * h - dt) > 1e-9 * max(dt, h):
         raise ConfigError(f"control_period: {dt!r} s is not a positive integer multiple of the "

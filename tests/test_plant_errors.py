@@ -48,6 +48,31 @@ def test_models_that_break_the_contract_are_refused(tmp_path, capsys, old, new, 
     assert message in err
 
 
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ('timestep="0.001"', 'timestep="0"', "<option timestep> must be a finite positive number of "
+     "seconds, found 0.0"),
+    ('timestep="0.001"', 'timestep="nan"', "<option timestep> must be a finite positive number"),
+    ('timestep="0.001"', 'timestep="-0.001"', "<option timestep> must be a finite positive "
+     "number of seconds, found -0.001"),
+    ('timestep="0.001"', 'timestep="inf"', "<option timestep> must be a finite positive number"),
+    ('gravity="0 0 -9.81"', 'gravity="0 0 nan"', "<option gravity> must be finite, found "
+     "[0.0, 0.0, nan]"),
+])
+def test_a_bad_timestep_or_gravity_is_one_line_naming_the_file(tmp_path, capsys, old, new,
+                                                                message):
+    from pendulum_lqg.plant import load_plant
+
+    assert _XML.count(old) == 1
+    path = tmp_path / "options.xml"
+    path.write_text(_XML.replace(old, new))
+    with pytest.raises(ConfigError) as info:
+        load_plant(path)
+    assert str(info.value).startswith(f"model: {path}: {message}"), info.value
+    for argv in (["design", "--model", str(path)], ["run", "--model", str(path), "--episodes", "1"]):
+        status, err = run_cli(capsys, argv)
+        assert_one_line_error(status, err, f"model: {path}: ")
+
+
 def test_a_broken_model_file_in_an_experiment_names_both_files(tmp_path, capsys):
     xml = tmp_path / "no_limit.xml"
     xml.write_text(_XML.replace(' ctrlrange="-10 10"', ""))

@@ -44,7 +44,7 @@ from mujoco import rollout as mj_rollout
 from pendulum_lqg.core.physics import thread_count
 from pendulum_lqg.core.runner import run_episodes, shard_count
 from pendulum_lqg.core.scenario import Scenario
-from pendulum_lqg.plant import load_plant
+from pendulum_lqg.plant import load_plant, steps_per_period
 from pendulum_lqg.policy import DesignSpec, design_policy
 
 #: Fewest physics steps a rollout chunk (one thread-pool task) should hold: smaller chunks cost
@@ -147,16 +147,40 @@ def faster_series(series: dict[str, list[float]]) -> str:
     return max(series, key=lambda name: statistics.median(series[name]))
 
 
+def _count(name: str, value: object) -> int:
+    """``value`` as a positive integer; else a one-line error naming ``name``."""
+    from pendulum_lqg.errors import ConfigError
+
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+        raise ConfigError(f"{name}: expected a positive integer, got {value!r}")
+    return int(value)
+
+
 def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None = None,
              repeats: int = 5, memory: bool = False,
              log: Callable[[str], None] = lambda s: None) -> dict[str, Any]:
-    plant = load_plant()
-    nthread = thread_count(nthread)
+    from pendulum_lqg.limits import (
+        MAX_PERF_REPEATS,
+        MAX_PERF_STEPS,
+        MAX_RUN_EPISODES,
+        check_at_most,
+    )
+
+    # the sizes first: nothing is allocated or timed before they are known to fit
+    check_at_most("repeats", _count("repeats", repeats), MAX_PERF_REPEATS,
+                  "alternating pairs, each running the whole batch three times")
+    check_at_most("episodes", _count("episodes", episodes), MAX_RUN_EPISODES,
+                  "episodes of the one batch timed")
     scenario = Scenario(duration=duration)
+    plant = load_plant()
+    k = steps_per_period(plant, scenario.control_period)
+    nstep = scenario.n_periods * k
+    check_at_most("episodes × duration", episodes * nstep, MAX_PERF_STEPS,
+                  f"physics steps of the batch, {episodes:,} episodes × {nstep:,} steps of "
+                  f"{plant.timestep:g} s: the bare-physics baselines hold a force for each")
+    nthread = thread_count(nthread)
     policy = design_policy(plant, scenario.control_period, scenario.noise,
                            DesignSpec(controller="dlqr", observer="kalman"))
-    k = round(scenario.control_period / plant.timestep)
-    nstep = scenario.n_periods * k
     raw_rollout: list[float] = []
     raw_batch: list[float] = []
     closed: list[float] = []

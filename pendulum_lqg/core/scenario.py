@@ -16,7 +16,7 @@ import numpy as np
 from pendulum_lqg._config import config_vector, positive_number
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.limits import MAX_DELAY_PERIODS, check_duration
+from pendulum_lqg.limits import MAX_DELAY_PERIODS, check_control_period, check_duration
 from pendulum_lqg.names import PLANTS
 from pendulum_lqg.plant import ModelOverrides, Randomization
 
@@ -76,7 +76,8 @@ class Scenario:
     randomize: Randomization = field(default_factory=Randomization)
 
     def __post_init__(self) -> None:
-        for name in ("control_period", "duration", "theta_max", "settle_band", "cost_R"):
+        object.__setattr__(self, "control_period", check_control_period(self.control_period))
+        for name in ("duration", "theta_max", "settle_band", "cost_R"):
             object.__setattr__(self, name, positive_number(name, getattr(self, name)))
         check_duration(self.duration, self.control_period)     # at most MAX_PERIODS periods
         object.__setattr__(self, "x0", config_vector("x0", self.x0, 4))

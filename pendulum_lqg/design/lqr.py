@@ -21,6 +21,7 @@ from pendulum_lqg.design._checks import (
     require_stable,
 )
 from pendulum_lqg.errors import DesignError
+from pendulum_lqg.limits import MAX_RICCATI_FLOATS, check_at_most
 
 
 @dataclass(frozen=True)
@@ -188,7 +189,8 @@ def finite_horizon_dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: Array
     Parameters
     ----------
     Phi : (n, n), Gamma : (n, m), Q : (n, n) PSD, R : (m, m) PD, S : (n, n) PSD terminal weight
-    horizon : int ≥ 1, number of control steps N
+    horizon : int ≥ 1, number of control steps N; at most
+        :data:`~pendulum_lqg.limits.MAX_RICCATI_FLOATS` ``// n² − 1`` (every ``P[n]`` is kept)
 
     Returns
     -------
@@ -205,6 +207,9 @@ def finite_horizon_dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: Array
     S = as_weight("S", S, n, definite=False)
     if isinstance(horizon, bool) or not isinstance(horizon, int | np.integer) or horizon < 1:
         raise DesignError(f"horizon: expected an integer ≥ 1, got {horizon!r}")
+    check_at_most("horizon", int(horizon), MAX_RICCATI_FLOATS // (n * n) - 1,
+                  f"steps for n = {n} states: P keeps (horizon + 1)·n² floats, at most "
+                  f"{MAX_RICCATI_FLOATS:,}", error=DesignError)
     P = np.zeros((horizon + 1, n, n))
     K = np.zeros((horizon, m, n))
     P[horizon] = S

@@ -17,6 +17,7 @@ from pendulum_lqg.core.rules import FAIL_NONE, FAIL_REASONS
 from pendulum_lqg.envs.config import Actions, EnvConfig, positive_int, step_reward
 from pendulum_lqg.envs.render import Frames, image_size
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
+from pendulum_lqg.limits import MAX_NUM_ENVS, check_at_most
 
 #: the vector env's info keys, each with its mask's key (Gymnasium's ``_key``), in order
 _INFO_KEYS = tuple((key, "_" + key) for key in ("cost", "running_cost", "state", "y_true",
@@ -71,7 +72,9 @@ class CartPoleLQGVectorEnv(VectorEnv):
                  max_episode_steps: int | None = None, nthread: int | None = None,
                  normalize_action: bool = False, render_mode: str | None = None,
                  width: int = 640, height: int = 480, **config: Any) -> None:
-        self.num_envs = positive_int("num_envs", num_envs)
+        self.num_envs = check_at_most("num_envs", positive_int("num_envs", num_envs),
+                                      MAX_NUM_ENVS, "each sub-env is a row of every array of "
+                                      "the batched simulation core")
         self.autoreset_mode = _autoreset_mode(autoreset_mode)
         if render_mode is not None and render_mode != "rgb_array":
             raise ConfigError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")

@@ -42,3 +42,16 @@ def test_a_run_with_an_endless_duration_is_refused_before_the_loop():
 
 
 # ---- 2. the design API under garbage input -----------------------------------------------------
+
+
+@pytest.mark.parametrize(("T", "message"), [
+    (1e-320, "control_period: expected at least 1e-06 s (the floor), got 1e-320 s"),
+    (1e-7, "control_period: expected at least 1e-06 s (the floor), got 1e-07 s"),
+    (2.0, "control_period: expected at most 1 s (the ceiling), got 2.0 s"),
+])
+def test_a_control_period_out_of_bounds_is_blamed_before_the_duration(T, message):
+    from pendulum_lqg.core.scenario import Scenario
+
+    with pytest.raises(ConfigError) as err:
+        Scenario(control_period=T)                 # the default 10 s would be > 10⁸ periods
+    assert str(err.value) == message

@@ -39,6 +39,26 @@ def test_overflowing_results_raise_instead_of_returning_inf():
                                    np.eye(2), 10)
 
 
+def test_a_finite_horizon_too_long_to_hold_is_refused_at_once():
+    import time
+
+    from pendulum_lqg.limits import MAX_RICCATI_FLOATS
+
+    Phi, Gamma = np.array([[1.0, 0.01], [0.0, 1.0]]), np.array([[0.0], [0.01]])
+    t = time.perf_counter()
+    with pytest.raises(DesignError, match=r"^horizon: at most 4,999,999 \(steps for n = 2 "
+                                          r"states: P keeps \(horizon \+ 1\)·n² floats, at most "
+                                          r"20,000,000\), got 100,000,000$"):
+        design.finite_horizon_dlqr(Phi, Gamma, np.eye(2), 1.0, np.eye(2), horizon=10**8)
+    assert time.perf_counter() - t < 1.0          # refused, not allocated (P would be 3.2 GB)
+    n4 = MAX_RICCATI_FLOATS // 16 - 1             # the cart-pole's 4 states: 1 249 999 steps
+    with pytest.raises(DesignError, match=f"^horizon: at most {n4:,} "):
+        design.finite_horizon_dlqr(np.eye(4), np.ones((4, 1)), np.eye(4), 1.0, np.eye(4),
+                                   horizon=n4 + 1)
+    assert design.finite_horizon_dlqr(Phi, Gamma, np.eye(2), 1.0, np.eye(2),
+                                      horizon=3).K.shape == (3, 1, 2)
+
+
 def test_raw_solver_errors_are_wrapped_naming_the_function():
     # a CARE whose Hamiltonian has eigenvalues on the imaginary axis: scipy raises LinAlgError
     with pytest.raises(DesignError, match=r"^Q: the cost does not weight the mode\(s\)"):
