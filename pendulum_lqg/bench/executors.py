@@ -76,6 +76,7 @@ class RayExecutor:
     def __init__(self, *, address: str | None = None, num_cpus: int | None = None,
                  max_in_flight: int | None = None, max_retries: int = 3, nthread: int = 1) -> None:
         if address not in (None, "auto"):
+            check_reachable(str(address))
             _token_auth_for_explicit_address()         # read by Ray when it is imported
         try:
             import ray
@@ -98,6 +99,11 @@ class RayExecutor:
         except ConnectionError as exc:
             raise ConfigError(f"--address: cannot reach a Ray cluster at {address!r}: "
                               f"{' '.join(str(exc).split())}") from exc
+        except Exception as exc:           # Ray's own refusals (a bad address, a failed start)
+            where = "a local Ray instance" if address is None else f"the Ray cluster at {address!r}"
+            raise ConfigError(f"--executor ray: cannot start or join {where}: "
+                              f"{type(exc).__name__}: {' '.join(str(exc).split())[:300]}"
+                              ) from exc
         cpus = int(ray.cluster_resources().get("CPU", 1))
         self.max_in_flight = max_in_flight or max(1, 2 * cpus)
         self._task = ray.remote(num_cpus=1, max_retries=max_retries,
@@ -140,6 +146,32 @@ class RayExecutor:
         return {"name": "ray", "address": self.address or "local",
                 "max_retries": self.max_retries, "max_in_flight": self.max_in_flight,
                 "nthread": self.nthread, "ray": self._ray.__version__}
+
+
+#: Seconds the driver waits for a TCP connection to ``--address HOST:PORT`` before giving up.
+CONNECT_TIMEOUT_S = 10.0
+
+
+def check_reachable(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
+    """Refuse ``HOST:PORT`` (or ``ray://HOST:PORT``) at once when nothing accepts a TCP
+    connection there: Ray's own connect keeps retrying for many minutes. A one-line
+    :class:`ConfigError` naming ``--address``."""
+    import socket
+
+    hostport = address.split("://", 1)[-1]
+    host, sep, port = hostport.rpartition(":")
+    host = host.strip("[]")                            # [::1]:6379
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ConfigError(f"--address: expected 'auto' or HOST:PORT (e.g. 10.0.0.5:6379), got "
+                          f"{address!r}")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout):
+            pass
+    except OSError as exc:
+        why = "timed out" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc))
+        raise ConfigError(f"--address: no Ray cluster answers at {address} ({why} within "
+                          f"{timeout:g} s); start its head with `ray start --head` or give the "
+                          "address it prints") from None
 
 
 def _token_auth_for_explicit_address() -> None:

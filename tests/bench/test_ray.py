@@ -142,3 +142,25 @@ def test_without_ray_the_executor_is_a_one_line_error(monkeypatch, tmp_path, cap
                    "'pendulum-lqg[ray]' (in a checkout: uv run --extra ray pendulum-lqg …)")
     assert main(["bench", "lecture", "--address", "auto", "--out", str(tmp_path / "y")]) == 2
     assert "--address: only with --executor ray" in capsys.readouterr().err
+
+
+def test_an_address_where_nothing_listens_fails_at_once_with_one_line(tmp_path, capsys):
+    import socket
+
+    from conftest import assert_one_line_error, run_cli
+
+    with socket.socket() as held:                   # bound, never listening: refused, and no
+        held.bind(("127.0.0.1", 0))                 # other process can take the port meanwhile
+        address = f"127.0.0.1:{held.getsockname()[1]}"
+        t = time.perf_counter()
+        status, err = run_cli(capsys, ["bench", "lecture", "--episodes", "2", "--out",
+                                       str(tmp_path / "o"), "--executor", "ray",
+                                       "--address", address])
+        assert time.perf_counter() - t < 60
+    assert_one_line_error(status, err, f"--address: no Ray cluster answers at {address} "
+                                       "(Connection refused within 10 s)")
+    assert not (tmp_path / "o").exists()
+    for bad in ("nowhere", "host:port", "10.0.0.1:99999"):
+        status, err = run_cli(capsys, ["bench", "lecture", "--out", str(tmp_path / "o"),
+                                       "--executor", "ray", "--address", bad])
+        assert_one_line_error(status, err, "--address: expected 'auto' or HOST:PORT")
