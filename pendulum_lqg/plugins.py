@@ -312,6 +312,11 @@ class PluginPolicy:
             copy.deepcopy(self)                     # the promise checked once: it deep-copies
         est = self._member("estimator", None)
         if est is not None:
+            if isinstance(est, int | float | complex | str | bytes | list | tuple | dict
+                          | np.ndarray | np.generic):
+                raise PluginError(f"policy {name!r}: estimator must be an object with x_prior, "
+                                  f"innovation and P (what recordings log), got "
+                                  f"{type(est).__name__}")
             self.estimator = _EstimatorView(self, est)
         self._rows = 0                              # rows of the last act
         params: Mapping[str, Any]

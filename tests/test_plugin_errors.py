@@ -182,6 +182,8 @@ def test_an_empty_policy_name_is_refused(capsys):
      "x_hat returned complex values"),
     ("@property\n    def x_hat(self):\n        raise ValueError('stale')",
      "reading x_hat raised ValueError: stale"),
+    ("estimator = 3", "estimator must be an object with x_prior, innovation and P (what "
+     "recordings log), got int"),
 ])
 def test_optional_members_that_raise_or_hold_garbage_are_one_line_errors(tmp_path, plant, member,
                                                                          message):
