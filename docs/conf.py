@@ -135,7 +135,7 @@ def _escape_bars(line: str) -> str:
                    for i, p in enumerate(parts))
 
 
-def _process_docstring(app, what, name, obj, options, lines):  # noqa: ARG001 - Sphinx's signature
+def _process_docstring(app, what, name, obj, options, lines):
     if any(line.strip() == "## Description" for line in lines):
         lines[:] = [f"This class documents itself in Markdown, Gymnasium's convention "
                     f"(``help({name.rsplit('.', 1)[-1]})``); the same content — spaces with "
@@ -151,7 +151,7 @@ def _process_docstring(app, what, name, obj, options, lines):  # noqa: ARG001 - 
 _ATTRIBUTE_TEXT: dict[str, list[str]] = {}
 
 
-def _restore_attribute_text(app, what, name, obj, options, lines):  # noqa: ARG001
+def _restore_attribute_text(app, what, name, obj, options, lines):
     if what in ("attribute", "data", "property") and name in _ATTRIBUTE_TEXT:
         lines[:] = _ATTRIBUTE_TEXT.pop(name)
 

@@ -6,7 +6,7 @@ with scipy only (no pendulum_lqg design code)::
 
     uv run pendulum-lqg run --policy experiments/plugin_lqg.py:make --episodes 200
 
-Design (THEORY §2–3): the plant is ``x[n+1] = Φ x[n] + Γ u[n] + w[n]``, ``y[n] = C x[n] + v[n]``
+Design (docs/theory.md §2–3): the plant is ``x[n+1] = Φ x[n] + Γ u[n] + w[n]``, ``y[n] = C x[n] + v[n]``
 with ``E{wwᵀ} = W·T`` (the context's state-form density over one period) and ``E{vvᵀ} = V``.
 
 * controller — DARE for ``(Φ, Γ, Q·T, R·T)``, ``K = (R·T + ΓᵀPΓ)⁻¹ ΓᵀPΦ`` (the rectangle rule

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from pendulum_lqg.core.metrics import wilson_interval
-from pendulum_lqg.core.protocol import Policy
+from pendulum_lqg.core.protocol import PolicyProtocol
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.errors import ConfigError
@@ -68,7 +68,7 @@ def _x0(theta: float, theta_dot: float = 0.0) -> tuple[float, float, float, floa
     return (0.0, float(theta), 0.0, float(theta_dot))
 
 
-def success_count(plant: Plant, scenario: Scenario, policy: Policy, theta0: float, *, seed: int,
+def success_count(plant: Plant, scenario: Scenario, policy: PolicyProtocol, theta0: float, *, seed: int,
                   episodes: int, nthread: int | None = None) -> Evaluation:
     """Run episodes ``0 … episodes−1`` from ``x₀ = [0, θ₀, 0, 0]`` and count the successes."""
     sc = scenario.replace(x0=_x0(theta0), x0_std=(0.0, 0.0, 0.0, 0.0))
@@ -77,7 +77,7 @@ def success_count(plant: Plant, scenario: Scenario, policy: Policy, theta0: floa
                       n=episodes)
 
 
-def bisect_theta(plant: Plant, scenario: Scenario, policy: Policy, *, seed: int, episodes: int,
+def bisect_theta(plant: Plant, scenario: Scenario, policy: PolicyProtocol, *, seed: int, episodes: int,
                  level: float = 0.95, theta_lo: float = 0.05, theta_hi: float = 1.2,
                  tolerance: float = 0.01, nthread: int | None = None) -> BisectionResult:
     """Bisection for the largest ``θ₀`` whose batch success fraction is ≥ ``level``.
@@ -117,7 +117,7 @@ def bisect_theta(plant: Plant, scenario: Scenario, policy: Policy, *, seed: int,
     return BisectionResult(lo, hi, False, evals)
 
 
-def success_map(plant: Plant, scenario: Scenario, policy: Policy, thetas: np.ndarray,
+def success_map(plant: Plant, scenario: Scenario, policy: PolicyProtocol, thetas: np.ndarray,
                 theta_dots: np.ndarray, *, seed: int, settle_fraction: float = 0.8,
                 nthread: int | None = None) -> dict[str, np.ndarray]:
     """Success over the grid ``thetas × theta_dots`` of initial ``(θ₀, θ̇₀)`` (cart at rest at 0).

@@ -45,12 +45,9 @@ def add_parsers(sub: Any, positive_int: Any) -> None:
 
 
 def cmd_score(args: argparse.Namespace) -> int:
-    from pendulum_lqg.bench.results import versions
     from pendulum_lqg.errors import ConfigError
     from pendulum_lqg.files import atomic_write
-    from pendulum_lqg.plugins import is_plugin_ref
-    from pendulum_lqg.scoreboard import episodes as ep
-    from pendulum_lqg.scoreboard.score import score_document
+    from pendulum_lqg.scoreboard.score import score_entry
     from pendulum_lqg.scoreboard.suites import load_suite, suite_names
 
     if (args.policy is None) == (args.agent is None):
@@ -61,40 +58,9 @@ def cmd_score(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     if out is not None and out.is_dir():
         raise ConfigError(f"--out: {out} is a folder; expected a file name for the score (JSON)")
-    if args.agent is not None:
-        factory = ep.load_agent(args.agent)
-        normalized = args.normalize_action or bool(getattr(factory, "normalize_action", False))
-        name, kind = args.agent, "agent"
-
-        def rows_of(s: Any) -> list[dict[str, Any]]:
-            return ep.agent_rows(s, factory, name=name, normalize_action=normalized)
-    else:
-        name = args.policy
-        if not name:
-            raise ConfigError("policy: expected 'controller+observer' or a plug-in MODULE:ATTR, "
-                              "got ''")
-        kind = "plugin" if is_plugin_ref(name) else "builtin"
-
-        def rows_of(s: Any) -> list[dict[str, Any]]:
-            return ep.policy_rows(s, name, base_dir=Path.cwd(), nthread=args.nthread)
-
-    cache: dict[tuple[str, str], list[dict[str, Any]]] = {}
-
-    def reference_of(s: Any) -> list[dict[str, Any]]:
-        key = (s.name, s.reference)
-        if key not in cache:
-            cache[key] = ep.policy_rows(s, s.reference, nthread=args.nthread)
-        return cache[key]
-
-    def bound_of(s: Any) -> list[dict[str, Any]]:
-        return ep.full_state_rows(s, nthread=args.nthread)
-
-    def rows_or_reference(s: Any) -> list[dict[str, Any]]:
-        if kind == "builtin" and name == s.reference:     # the reference itself: one run
-            return reference_of(s)
-        return rows_of(s)
-
-    doc = score_document(name, kind, suites, rows_or_reference, reference_of, bound_of, versions())
+    doc = score_entry(suites, policy=args.policy, agent=args.agent,
+                      normalize_action=args.normalize_action, nthread=args.nthread,
+                      base_dir=Path.cwd())
     text = json.dumps(doc, indent=1, allow_nan=False)
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)

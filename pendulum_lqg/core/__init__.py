@@ -6,21 +6,21 @@ Data flow::
          (shards, seeds,     measure → act →    mujoco_batch / mujoco_step /   streamed per
           trajectories)      advance → rules    linear                         episode
 
-=====================  ======================================================================
-module                 concept
-=====================  ======================================================================
-``scenario``           :class:`~pendulum_lqg.core.scenario.Scenario`: the control problem
-``rules``              the rules of a control period, each one function (below)
-``period``             the period buffer the physics, the rules and the metrics share
-``physics/``           the backends behind :class:`~pendulum_lqg.core.physics.base.Physics`
-``sensing``            delays, sample losses, actuator lag, randomised models (per row)
-``loop``               :class:`~pendulum_lqg.core.loop.Simulator`: measure → act → advance → rules
-``runner``             :func:`~pendulum_lqg.core.runner.run_episodes`: batches, shards, trajectories
-``protocol``           the typed policy protocol the loop drives
-``noise``, ``seeding`` noise with units from per-episode generators; the episodes' seeds
-``metrics``            streamed per-episode metrics and their aggregates
-``trajectory``         full trajectories, on request
-=====================  ======================================================================
+======================  =====================================================================
+module                  concept
+======================  =====================================================================
+``scenario``            :class:`~pendulum_lqg.core.scenario.Scenario`: the control problem
+``rules``               the rules of a control period, each one function (below)
+``period``              the period buffer the physics, the rules and the metrics share
+``physics/``            the backends behind :class:`~pendulum_lqg.core.physics.base.Physics`
+``sensing``             delays, sample losses, actuator lag, randomised models (per row)
+``loop``                :class:`~pendulum_lqg.core.loop.Simulator`: measure → act → advance
+``runner``              :func:`~pendulum_lqg.core.runner.run_episodes`: batches, shards
+``protocol``            the typed policy protocol the loop drives
+``noise``, ``seeding``  noise with units from per-episode generators; the episodes' seeds
+``metrics``             streamed per-episode metrics and their aggregates
+``trajectory``          full trajectories, on request
+======================  =====================================================================
 
 The rules, each defined once in :mod:`pendulum_lqg.core.rules` and called by every path (batch,
 single env, vector env):

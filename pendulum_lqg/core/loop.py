@@ -97,7 +97,7 @@ class Simulator:
         self.u_max = plant.u_max
         self.track = plant.track_limit
         self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h)
-        #: h·[diag(Q), R]: the cost of a period is Σ weights·z² over its physics steps, z = [x, u]
+        # The cost weights h·[diag(Q), R]: a period's cost is Σ weights·z² over its physics steps.
         self.weights = rules.cost_weights(scenario.cost_Q, scenario.cost_R, self.h)
         self._bounds = rules.failure_bounds(theta_max=scenario.theta_max, track_limit=self.track,
                                             u_max=self.u_max)

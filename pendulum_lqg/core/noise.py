@@ -1,8 +1,9 @@
 """Process and measurement noise with explicit units, drawn from per-episode generators.
 
-Units (THEORY.md §3) — every parameter says which kind it is:
+Units (docs/theory.md §3.7) — every parameter says which kind it is:
 
 * ``process_density`` is a **continuous-time spectral density** (diagonal of W):
+
   - ``process="state"`` (F = I₄, the lecture model): ``ẋ = f(x, u) + w``, W in
     ``[m²/s², rad²/s², m²/s⁴, rad²/s⁴] · s``. The simulator adds a jump ``δx ~ N(0, W·T)`` to the
     state once per control period T — exactly the lecture's ``x ← x + T·w`` with
@@ -10,6 +11,7 @@ Units (THEORY.md §3) — every parameter says which kind it is:
   - ``process="force"``: ``M q̈ = … + f``, generalised forces ``f = [N, N·m]`` with density W in
     ``[N², N²m²]·s``, applied through ``qfrc_applied`` and redrawn every physics step h as
     ``f ~ N(0, W/h)`` (the sampled equivalent of white noise).
+
 * ``measurement_variance`` is a **per-sample covariance** (diagonal of V) of ``v`` in
   ``y[n] = [p, θ] + v[n]``, units ``[m², rad²]``.
 

@@ -30,7 +30,7 @@ import numpy as np
 
 
 @runtime_checkable
-class Policy(Protocol):
+class PolicyProtocol(Protocol):
     """The members every policy has (:mod:`pendulum_lqg.core.protocol` lists the optional ones)."""
 
     def reset(self, n: int, x_hat0: np.ndarray | None = None) -> None:
@@ -44,7 +44,7 @@ class Policy(Protocol):
         ...
 
 
-class SelectablePolicy(Policy, Protocol):
+class SelectablePolicyProtocol(PolicyProtocol, Protocol):
     """A policy that can drop rows when episodes end."""
 
     def select(self, rows: np.ndarray) -> None:

@@ -20,7 +20,7 @@ import numpy as np
 
 from pendulum_lqg.core.loop import Simulator
 from pendulum_lqg.core.physics import thread_count
-from pendulum_lqg.core.protocol import Policy, SelectablePolicy
+from pendulum_lqg.core.protocol import PolicyProtocol, SelectablePolicyProtocol
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import episode_generators, episode_seeds
 from pendulum_lqg.core.trajectory import Trajectory, TrajectoryLog, estimator_snapshot
@@ -46,7 +46,7 @@ class _FixedBatch:
     """A policy without ``select``: it keeps its whole original batch; rows of ended episodes get
     zero measurements and their forces are dropped."""
 
-    def __init__(self, policy: Policy, n: int) -> None:
+    def __init__(self, policy: PolicyProtocol, n: int) -> None:
         self.policy, self.n0, self.alive = policy, n, np.arange(n)
 
     def act(self, y: np.ndarray) -> np.ndarray:
@@ -88,7 +88,7 @@ def shard_count(n: int, nthread: int, backend: str, policy: object) -> int:
     return max(1, min(nthread, n // MIN_SHARD_ROWS))
 
 
-def _shard_copy(policy: Policy) -> Policy:
+def _shard_copy(policy: PolicyProtocol) -> PolicyProtocol:
     """A shard's own copy of ``policy`` (``independent_rows = True`` promises that it deep-copies);
     a copy that fails is a one-line error, not a traceback from inside ``copy``."""
     try:
@@ -107,7 +107,7 @@ class _Cancelled(Exception):
     """Another shard failed or the caller was interrupted: stop this one."""
 
 
-def run_episodes(plant: Plant, scenario: Scenario, policy: Policy, *, seed: int,
+def run_episodes(plant: Plant, scenario: Scenario, policy: PolicyProtocol, *, seed: int,
                  episodes: Iterable[int] | np.ndarray, backend: Literal["rollout", "step"] = "rollout",
                  nthread: int | None = None, trajectory: bool = False,
                  initial_states: np.ndarray | None = None) -> BatchResult:
@@ -161,7 +161,7 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: Policy, *, seed: int,
                        shard_seconds=[t for res in results for t in res.shard_seconds])
 
 
-def _run_batch(plant: Plant, scenario: Scenario, policy: Policy, seed: int, episodes: list[int],
+def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: int, episodes: list[int],
                backend: Literal["rollout", "step"], nthread: int, trajectory: bool,
                initial_states: np.ndarray | None, stop: threading.Event | None,
                t0: float) -> BatchResult:
@@ -180,7 +180,7 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: Policy, seed: int, epis
             policy.reset(n)
         needs_state = bool(getattr(policy, "needs_state", False))
         # without select, keep feeding the whole batch and use only the running rows
-        driven = (cast(SelectablePolicy, policy) if callable(getattr(policy, "select", None))
+        driven = (cast(SelectablePolicyProtocol, policy) if callable(getattr(policy, "select", None))
                   else _FixedBatch(policy, n))
         for _ in range(sim.n_periods):
             if stop is not None and stop.is_set():

@@ -1,6 +1,6 @@
 """Kalman filters: continuous Kalman–Bucy, discrete steady-state (both gain forms), time-varying.
 
-Noise conventions (THEORY.md §3): the continuous design takes spectral densities ``W`` (of ``w`` in
+Noise conventions (docs/theory.md §3.7): the continuous design takes spectral densities ``W`` (of ``w`` in
 ``ẋ = Ax + Bu + Gw``) and ``V`` (of ``v`` in ``y = Cx + v``), units² · s. The discrete designs take
 per-sample covariances ``E{w wᵀ} = W`` (of ``w[n]`` in ``x[n+1] = Φx + Γu + G w[n]``) and
 ``E{v vᵀ} = V``.
@@ -105,7 +105,7 @@ def kalman(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike)
 
     References
     ----------
-    Kalman & Bucy (1961). THEORY.md §5 example 2: Σ = [[√3, 1], [1, √3]], L = [√3, 1]ᵀ.
+    Kalman & Bucy (1961). docs/theory.md §5.2: Σ = [[√3, 1], [1, √3]], L = [√3, 1]ᵀ.
     """
     A, G, C, W, V = _observer_data(A, G, C, W, V, ("A", "G"))
     require_detectable(A, C, discrete=False, names="(A, C)")

@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike
 from pendulum_lqg.design._checks import as_matrix, as_poles, as_positive, as_square, design_function
 from pendulum_lqg.errors import DesignError
 
-#: The project's default continuous-time observer poles (deliberately slow; see THEORY.md §3).
+#: The project's default continuous-time observer poles (deliberately slow; see docs/theory.md §3.1).
 DEFAULT_OBSERVER_POLES: tuple[float, ...] = (-0.4, -0.5, -0.6, -0.7)
 
 
@@ -72,7 +72,7 @@ def luenberger(A: ArrayLike, C: ArrayLike, poles: ArrayLike) -> ObserverResult:
 
     References
     ----------
-    Luenberger (1966); THEORY.md §3.
+    Luenberger (1966); docs/theory.md §3.1.
     """
     A = as_square("A", A)
     n = A.shape[0]

@@ -1,6 +1,7 @@
 r"""The lecture's other observer designs: Ackermann, reduced order, and LMIs (decay rate, H₂, H∞).
 
-Formulas and derivations: ``docs/observers.md`` (a section in the style of THEORY.md §3).
+Formulas and derivations: ``docs/observers.md`` (the observers beyond Luenberger and Kalman) and
+``docs/theory.md`` §3.3.
 
 * :func:`ackermann` — single-output pole placement, :math:`L = \varphi(A)\,\mathcal O^{-1} e_n`;
 * :func:`reduced_order_observer` / :func:`dreduced_order_observer` — estimate only the unmeasured
@@ -155,7 +156,7 @@ def _reduced(A: ArrayLike, B: ArrayLike, C: ArrayLike, poles: ArrayLike, form: s
 @design_function('the poles')
 def reduced_order_observer(A: ArrayLike, B: ArrayLike, C: ArrayLike, poles: ArrayLike,
                            ) -> ReducedOrderObserver:
-    r"""Continuous reduced-order Luenberger observer (Luenberger 1964; THEORY.md §3).
+    r"""Continuous reduced-order Luenberger observer (Luenberger 1964; docs/theory.md §3.3).
 
     .. math::
         \dot z = (\bar A_{22} - G\bar A_{12}) z

@@ -22,7 +22,7 @@ from typing import Any, Protocol
 import gymnasium as gym
 import numpy as np
 
-from pendulum_lqg import ENV_ID
+from pendulum_lqg import ENV_ID, register_envs
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.seeding import episode_seeds
 from pendulum_lqg.errors import ConfigError, PluginError
@@ -96,6 +96,7 @@ def _check_observation(suite: Suite, name: str, needs_state: bool) -> None:
 # ---- the Gymnasium path ---------------------------------------------------------------------------
 def make_env(suite: Suite, *, normalize_action: bool = False) -> gym.Env:
     """The suite's Gymnasium env (``gymnasium.make`` with the suite's keywords)."""
+    register_envs()          # the pendulum-lqg command skips the registration at import
     return gym.make(ENV_ID, normalize_action=normalize_action, **suite.env)
 
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -110,6 +111,63 @@ def score_document(policy: str, kind: str, suites: Sequence[Suite],
                            **suite_score(s, rows, reference_of(s), bound_of(s))}
     return {"policy": policy, "kind": kind, "score_version": SCORE_VERSION, "versions": versions,
             "suites": entries}
+
+
+def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: str | None = None,
+                normalize_action: bool = False, nthread: int | None = None,
+                base_dir: Path | None = None,
+                cache: dict[tuple[str, str, str], list[dict[str, Any]]] | None = None,
+                ) -> dict[str, Any]:
+    """The score file of one entry — a built-in or plug-in ``policy`` (the batch path), or a
+    Gymnasium ``agent`` reference (the env path) — on ``suites``: what ``pendulum-lqg score``
+    writes. ``cache`` (suite fingerprint, kind, policy) → rows keeps the references' and the
+    full-state bounds' rows between entries (the leaderboard scores many entries at once; the
+    rows are the same ones either way)."""
+    from pendulum_lqg.bench.results import versions
+    from pendulum_lqg.errors import ConfigError
+    from pendulum_lqg.plugins import is_plugin_ref
+    from pendulum_lqg.scoreboard import episodes as ep
+
+    if (policy is None) == (agent is None):
+        raise ConfigError("score: give one POLICY or one --agent REF")
+    memo: dict[tuple[str, str, str], list[dict[str, Any]]] = {} if cache is None else cache
+
+    def cached(s: Suite, kind: str, name: str,
+               run: Callable[[], list[dict[str, Any]]]) -> list[dict[str, Any]]:
+        key = (s.fingerprint(), kind, name)
+        if key not in memo:
+            memo[key] = run()
+        return memo[key]
+
+    def reference_of(s: Suite) -> list[dict[str, Any]]:
+        return cached(s, "policy", s.reference,
+                      lambda: ep.policy_rows(s, s.reference, nthread=nthread))
+
+    def bound_of(s: Suite) -> list[dict[str, Any]]:
+        return cached(s, "bound", FULL_STATE_POLICY,
+                      lambda: ep.full_state_rows(s, nthread=nthread))
+
+    rows_of: Callable[[Suite], list[dict[str, Any]]]
+    if agent is not None:
+        factory = ep.load_agent(agent, base_dir=base_dir)
+        normalized = normalize_action or bool(getattr(factory, "normalize_action", False))
+        name, kind = agent, "agent"
+
+        def rows_of(s: Suite) -> list[dict[str, Any]]:
+            return ep.agent_rows(s, factory, name=agent, normalize_action=normalized)
+    else:
+        assert policy is not None
+        if not policy:
+            raise ConfigError("policy: expected 'controller+observer' or a plug-in MODULE:ATTR, "
+                              "got ''")
+        name, kind = policy, ("plugin" if is_plugin_ref(policy) else "builtin")
+
+        def rows_of(s: Suite) -> list[dict[str, Any]]:
+            if kind == "builtin" and policy == s.reference:   # the reference itself: one run
+                return reference_of(s)
+            return ep.policy_rows(s, policy, base_dir=base_dir, nthread=nthread)
+
+    return score_document(name, kind, suites, rows_of, reference_of, bound_of, versions())
 
 
 def _finite(value: float) -> float | None:

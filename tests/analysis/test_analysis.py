@@ -30,7 +30,7 @@ def cartpole():
 
 # ---- closed forms ---------------------------------------------------------------------------------
 def test_scalar_lq_loop_margins_closed_form():
-    # ẋ = x + u, Q = R = 1: K = 1 + √2 (THEORY §5.1), L(s) = K/(s − 1).
+    # ẋ = x + u, Q = R = 1: K = 1 + √2 (docs/theory.md §5.1), L(s) = K/(s − 1).
     K = 1 + math.sqrt(2)
     rep = M.loop_margins(M.lq_loop([[1.0]], [[1.0]], [[K]]), W_GRID)
     assert rep.closed_loop_stable

@@ -1,4 +1,4 @@
-"""The design layer against closed-form answers and published tables (THEORY.md §5)."""
+"""The design layer against closed-form answers and published tables (docs/theory.md §5)."""
 
 from __future__ import annotations
 

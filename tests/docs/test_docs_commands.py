@@ -7,7 +7,8 @@ What is collected, from the fenced blocks of README.md and docs/*.md:
   a ``$`` prompt, a trailing ``# comment`` and a shell redirection or pipe are dropped). Each is
   parsed by the command's own argument parser, so a flag that does not exist (``design --theta0``)
   fails here. The short ones also run, as a subprocess of the ``pendulum-lqg`` console script
-  (``python -m pendulum_lqg.cli`` without it) in a scratch folder: ``design``, ``--help`` / ``--version``, and ``run`` with ``--episodes`` ≤ 4; the
+  (``python -m pendulum_lqg.cli`` without it) in a scratch folder: ``design``, ``--help`` /
+  ``--version``, and ``run`` with ``--episodes`` ≤ 4; the
   test checks the exit status and a value in the output (the DLQR gain, the success count);
 * a ```` ```python ```` block preceded by ``<!-- test -->`` runs as a script in a scratch folder;
   when the next fenced block is ```` ```text ```` (what the page says it prints), its output must

@@ -1,12 +1,12 @@
 """Physics backends behind one interface (:class:`~pendulum_lqg.core.physics.base.Physics`).
 
-===================  ============================================================  ===========
-backend              what steps the plant                                           module
-===================  ============================================================  ===========
-``"rollout"``        ``mujoco.batch.Batch``, one simulation per row, on threads    mujoco_batch
-``"step"``           a plain ``mj_step`` loop, one row after another                mujoco_step
-``linear-zoh/euler`` the model's linearisation (``Scenario.plant``), numpy         linear
-===================  ============================================================  ===========
+====================  ==========================================================  ============
+backend               what steps the plant                                        module
+====================  ==========================================================  ============
+``"rollout"``         ``mujoco.batch.Batch``, one simulation per row, on threads  mujoco_batch
+``"step"``            a plain ``mj_step`` loop, one row after another             mujoco_step
+``linear-zoh/euler``  the model's linearisation (``Scenario.plant``), numpy       linear
+====================  ==========================================================  ============
 
 All MuJoCo backends start each period from ``mj_resetData`` with the row's state written in, so
 they give bit-identical states. A new backend is one class in one new file implementing
