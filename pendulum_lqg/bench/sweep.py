@@ -13,9 +13,10 @@ One driver for every executor: it prepares the results folder (lock, ``--resume`
 hands the pending :class:`~pendulum_lqg.bench.experiments.WorkUnit` s to the executor, writes each unit
 atomically as it comes back (in whatever order), shows the progress (units done / total, ETA) and
 assembles ``episodes.csv`` / ``summary.json`` at the end. A unit's rows depend only on the unit
-(its configuration, seed and episode range), never on where or with how many threads it ran, so the
+(its configuration, seed and episode range), never on the executor or the thread count, so the
 results are byte-identical for any executor (:mod:`pendulum_lqg.bench.executors`: in this process, or
-Ray tasks on a cluster).
+Ray tasks on a cluster) on machines of one CPU model and library versions; a cluster mixing CPUs
+gives each unit the last digits of the machine that ran it (docs: Concepts, reproducibility).
 """
 
 from __future__ import annotations
