@@ -233,6 +233,16 @@ def source_digest(ref: str, *, base_dir: Path | None = None) -> str:
     return digest.hexdigest()
 
 
+def check_source(ref: str, expected: str | None) -> None:
+    """The plugin's source must still be the one ``expected`` (its :func:`source_digest` when the
+    experiment was read): a file edited while a sweep runs would otherwise mix two versions of
+    the controller in one results folder."""
+    if expected is not None and source_digest(ref) != expected:
+        raise PluginError(f"policy {ref!r}: its source changed since the experiment was read; "
+                          "run the sweep again with --resume (the units of the old source are "
+                          "then recomputed)")
+
+
 def _one_line(exc: BaseException) -> str:
     text = " ".join(str(exc).split())
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__

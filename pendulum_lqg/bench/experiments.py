@@ -122,6 +122,16 @@ class Configuration:
     plugin: str | None = None
     #: the cart-pole MJCF (absolute path) instead of the shipped ``cartpole.xml``
     model_file: str | None = None
+    #: SHA-256 of the plugin's source (:func:`~pendulum_lqg.plugins.source_digest`), read when
+    #: the configuration is made (the experiment is parsed, right after the plugin was imported);
+    #: a unit refuses to run on another source, and its record keeps it
+    plugin_source: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.plugin is not None and self.plugin_source is None:
+            from pendulum_lqg.plugins import source_digest
+
+            object.__setattr__(self, "plugin_source", source_digest(self.plugin))
 
     @property
     def label(self) -> str:
@@ -207,14 +217,15 @@ class ExperimentSpec:
     study_params: dict[str, Any] = field(default_factory=dict)
     #: folder of the experiment file (relative plugin paths), not part of the fingerprint
     base_dir: Path | None = None
-    #: SHA-256 of each plugin's source (:func:`~pendulum_lqg.plugins.source_digest`), by plugin
-    #: reference; read when the spec is parsed, so it describes the code that was imported
-    plugin_sources: dict[str, str] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         check_rows(self.episodes, len(self.configurations))
-        for cfg in self.configurations:
-            self.plugin_source(cfg)
+
+    @property
+    def plugin_sources(self) -> dict[str, str]:
+        """Each plugin of the grid and the SHA-256 of its source (:attr:`Configuration.plugin_source`)."""
+        return {c.plugin: c.plugin_source for c in self.configurations
+                if c.plugin is not None and c.plugin_source is not None}
 
     def with_overrides(self, *, episodes: int | None = None, seed: int | None = None,
                        model_file: str | None = None) -> ExperimentSpec:
@@ -252,16 +263,11 @@ class ExperimentSpec:
             blob += Path(model).read_bytes()
         return hashlib.sha256(blob).hexdigest()[:16]
 
-    def plugin_source(self, cfg: Configuration) -> str | None:
+    @staticmethod
+    def plugin_source(cfg: Configuration) -> str | None:
         """SHA-256 of ``cfg``'s plugin source (``None`` for a built-in policy): a unit written
         with another one is stale."""
-        if cfg.plugin is None:
-            return None
-        if cfg.plugin not in self.plugin_sources:
-            from pendulum_lqg.plugins import source_digest
-
-            self.plugin_sources[cfg.plugin] = source_digest(cfg.plugin)
-        return self.plugin_sources[cfg.plugin]
+        return cfg.plugin_source
 
 
 @dataclass(frozen=True)
@@ -458,8 +464,9 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
         values = dict(zip(keys, combo, strict=True))
         try:
             tables, plugin = _grid_point(values, base, base_dir)
-            cfg = Configuration(index=i, values=values, plugin=plugin, model_file=model_file,
-                                **tables)
+            cfg = Configuration(index=i, values=values, scenario=tables["scenario"],
+                                noise=tables["noise"], design=tables["design"],
+                                model=tables["model"], plugin=plugin, model_file=model_file)
             cfg.validate()  # every configuration now, not in the middle of a sweep
         except PendulumLQGError as exc:
             raise _located(exc, base, values) from exc
@@ -513,10 +520,12 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
 def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, Any]]:
     """Run one work unit; rows carry the configuration's grid values and index."""
     from pendulum_lqg.core.runner import run_episodes
-    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.plugins import build_policy, check_source
 
     scenario, spec = unit.config.build()
     nominal, simulated = unit.config.plants(scenario)
+    if unit.config.plugin is not None:       # the code the experiment's fingerprint describes
+        check_source(unit.config.plugin, unit.config.plugin_source)
     policy = build_policy(unit.config.plugin, plant=nominal, scenario=scenario, spec=spec)
     res = run_episodes(simulated, scenario, policy, seed=unit.seed,
                        episodes=range(unit.start, unit.stop), nthread=nthread)

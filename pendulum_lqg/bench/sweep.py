@@ -243,7 +243,7 @@ def record_telling_episodes(spec: ExperimentSpec, out: ResultsDir, record_dir: P
     import dataclasses
 
     from pendulum_lqg.core.runner import run_episodes
-    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.plugins import build_policy, check_source
     from pendulum_lqg.record import record_episodes, telling_episodes
 
     record_dir.mkdir(parents=True, exist_ok=True)
@@ -255,6 +255,8 @@ def record_telling_episodes(spec: ExperimentSpec, out: ResultsDir, record_dir: P
             continue
         scenario, dspec = cfg.build()
         nominal, simulated = cfg.plants(scenario)
+        if cfg.plugin is not None:
+            check_source(cfg.plugin, cfg.plugin_source)
         policy = build_policy(cfg.plugin, plant=nominal, scenario=scenario, spec=dspec)
         res = run_episodes(simulated, scenario, policy, seed=spec.seed,
                            episodes=sorted(set(picks.values())), nthread=nthread,

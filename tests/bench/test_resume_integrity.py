@@ -111,6 +111,32 @@ def test_resume_after_editing_a_plugin_can_refuse(tmp_path, capsys):
     assert "(2 unit(s) in all)" in err[0]
 
 
+def test_a_plugin_edited_while_a_sweep_runs_stops_it_and_resume_completes_it(tmp_path, capsys):
+    from pendulum_lqg.bench.executors import LocalExecutor
+    from pendulum_lqg.bench.sweep import run_sweep
+    from pendulum_lqg.errors import PluginError
+
+    spec = _setup(tmp_path)
+    out = tmp_path / "out"
+
+    class EditsMidway(LocalExecutor):
+        def run(self, units):
+            for i, outcome in enumerate(super().run(units)):
+                yield outcome
+                if i == 2:                 # the plug-in's first unit is done
+                    (tmp_path / "ctrl.py").write_text(PLUGIN.format(gains="1.0, 25.0"))
+
+    with pytest.raises(PluginError, match="its source changed since the experiment was read"):
+        run_sweep(load_spec(str(spec)), out, executor=EditsMidway())
+    assert len(list((out / "units").glob("*.csv"))) == 3
+    capsys.readouterr()
+    assert _bench(spec, out, "--resume") == 0
+    assert "unit c001_e000000-000002: written by another version" in capsys.readouterr().err
+    fresh = tmp_path / "fresh"
+    assert _bench(spec, fresh) == 0
+    assert (out / "episodes.csv").read_bytes() == (fresh / "episodes.csv").read_bytes()
+
+
 # ---- units checked by their content --------------------------------------------------------------
 def _rehash(out: Path, key: str) -> None:
     """Make the unit's record match its (tampered) CSV again, as a careless tool would."""
