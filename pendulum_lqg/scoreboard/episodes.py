@@ -122,7 +122,14 @@ def agent_rows(suite: Suite, factory: AgentFactory, *, name: str = "agent",
         agent.reset()
         terminated = truncated = False
         while not (terminated or truncated):
-            obs, _, terminated, truncated, info = env.step(agent.act(obs))
+            try:
+                action = agent.act(obs)
+            except (PluginError, ConfigError):
+                raise
+            except Exception as exc:
+                raise PluginError(f"agent {name!r}: act raised {type(exc).__name__}: "
+                                  f"{' '.join(str(exc).split())[:200]}") from exc
+            obs, _, terminated, truncated, info = env.step(action)
         rows.append({"episode": k, "seed": seed, "success": not terminated,
                      "failure_reason": info["failure_reason"],
                      "cost": float(info["running_cost"])})

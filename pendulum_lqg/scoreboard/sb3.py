@@ -14,6 +14,8 @@ it was trained (the training script writes it)::
 env — the frame stack (newest frame last, zeros before the first, as ``VecFrameStack``), then the
 normalisation of the stacked observation with the frozen statistics — and asks the model's
 ``predict`` for a deterministic action, carrying a recurrent policy's state across the episode.
+A sample that is lost or not yet delivered (``nan``, under ``dropout`` or a measurement delay) is
+replaced by the last one received (zeros before the first): the networks never saw a nan.
 Nothing here imports torch until a model is loaded.
 """
 
@@ -50,6 +52,7 @@ class SB3Agent:
                                      + float(obs_norm.get("epsilon", 1e-8))),
                              float(obs_norm.get("clip", 10.0)))
         self._stack: np.ndarray | None = None
+        self._held = np.zeros(0)
         self._state: Any = None
         self._start = True
 
@@ -60,6 +63,11 @@ class SB3Agent:
         obs = np.asarray(observation, dtype=float)
         if self._stack is None:
             self._stack = np.zeros(obs.size * self.frame_stack)
+            self._held = np.zeros(obs.size)
+        if np.all(np.isfinite(obs)):
+            self._held = obs
+        else:                    # a lost or not yet delivered sample (nan): hold the last one
+            obs = self._held
         self._stack = np.roll(self._stack, -obs.size)
         self._stack[-obs.size:] = obs
         seen = self._stack

@@ -167,6 +167,11 @@ def test_the_sb3_adapter_stacks_normalises_and_carries_the_recurrent_state():
     agent.act(np.array([1.0, 0.0]))
     np.testing.assert_array_equal(model.calls[2][0], [[0, 0, -0.5, 0, 0, 0]])
     assert model.calls[2][1] is None and model.calls[2][2].tolist() == [True]
+    agent.act(np.array([np.nan, np.nan]))           # a lost sample: the last one is held
+    np.testing.assert_array_equal(model.calls[3][0], [[0, 0, 0, 0, 0, 0]])
+    agent.reset()
+    agent.act(np.array([np.nan, np.nan]))           # nothing received yet: zeros
+    np.testing.assert_array_equal(model.calls[4][0], [[0, 0, -0.5, 0, -0.5, 0]])
 
 
 def test_the_board_tabulates_comparable_scores_and_lists_the_rest(capsys, tmp_path):
