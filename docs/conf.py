@@ -30,7 +30,8 @@ extensions = [
 ]
 source_suffix = {".md": "markdown"}
 root_doc = "index"
-exclude_patterns = ["_build", "Thumbs.db", ".DS_Store"]
+# leaderboard/: the score files and the generated board, included by leaderboard.md
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "leaderboard"]
 
 # MyST: $…$ / $$…$$ maths, amsmath environments, ::: fences; anchors for every heading down to ###
 # so that links such as [text](gymnasium.md#the-reward) are checked by the build.

@@ -5,7 +5,7 @@ Benchmark it against the built-in LQG policies on the very same seeded episodes:
     uv run pendulum-lqg run --policy experiments/plugin_example.py:make --episodes 100
     uv run pendulum-lqg bench plugins          # experiments/plugins.toml: this plugin beside LQG
 
-How a plugin works (README "Benchmark your own controller"): ``make`` is a *factory*. The benchmark
+How a plugin works (docs/plugins.md): ``make`` is a *factory*. The benchmark
 calls it once per batch of episodes with a :class:`pendulum_lqg.PolicyContext` — the nominal
 plant's linear models (``A, B, C``, ``Phi, Gamma`` at the control period ``dt``), the noise
 (``W``, ``V``), the actuator limit ``u_max`` and the cost weights ``Q, R`` — and gets back an object

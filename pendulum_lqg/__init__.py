@@ -14,7 +14,7 @@ core: those load when an environment is made. The one process that skips it is t
 ``pendulum-lqg`` command itself, which never makes a Gymnasium env and whose ``--help`` must not wait
 for numpy (it can still call :func:`register_envs`).
 
-Public API (stable from 0.2.0; a change gets a version bump and a README note): :data:`ENV_ID`,
+Public API (stable from 0.2.0; a change gets a version bump and a CHANGELOG.md entry): :data:`ENV_ID`,
 :class:`PolicyContext` and the policy-plugin protocol (:mod:`pendulum_lqg.plugins`), the CLI flags,
 and the results schema (:data:`SCHEMA_VERSION`).
 """
@@ -32,7 +32,7 @@ __all__ = ["ENV_ID", "SCHEMA_VERSION", "PolicyContext", "__version__", "register
 #: The Gymnasium id of the cart-pole LQG environment (:class:`pendulum_lqg.envs.single.CartPoleLQGEnv`).
 ENV_ID = "pendulum_lqg/CartPoleLQG-v0"
 
-#: Version of the results schema (``summary.json``, ``episodes.csv``); see README "Results schema".
+#: Version of the results schema (``summary.json``, ``episodes.csv``); see docs/results.md.
 SCHEMA_VERSION = 1
 
 # The registered defaults of the episode (``tests/test_env.py`` checks they are the env's own).

@@ -26,3 +26,8 @@ class ConfigError(PendulumLQGError):
 
 class PluginError(PendulumLQGError):
     """A user's policy plugin cannot be loaded or broke the policy protocol (names the plugin)."""
+
+
+class NotApplicable(ConfigError):
+    """A policy or agent cannot play a scoreboard suite as it is posed (it observes something else:
+    the true state where the suite gives only ``y``, or the reverse); its score row says so."""

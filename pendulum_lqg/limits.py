@@ -1,4 +1,4 @@
-"""Documented ceilings that keep a run finite in memory and time (README "Limits").
+"""Documented ceilings that keep a run finite in memory and time (docs/closed-loop.md, "Limits").
 
 Work that streams to disk unit by unit (``bench``) may be large; what must sit in memory at once
 is bounded here, and each bound is checked before any work starts, with a one-line

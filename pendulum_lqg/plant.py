@@ -254,7 +254,7 @@ class Plant:
         self._check_contract()
 
     def _check_contract(self) -> None:
-        """The rest of the model contract (README, "Your own cart-pole model"): a finite positive
+        """The rest of the model contract (docs/model.md): a finite positive
         timestep and finite gravity, joint kinds, a limited track, a limited motor on the slider,
         the two position sensors. Without these checks a missing ``range`` or ``ctrlrange`` read
         as a 0 m track or a 0 N motor, and a zero or nan timestep failed deep in the timing."""

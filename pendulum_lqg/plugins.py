@@ -17,7 +17,7 @@ policy is a *batched* object::
 named ``MODULE:ATTR`` (an importable module) or ``path/to/file.py:ATTR``; ``ATTR`` is a factory
 called once per batch with a :class:`PolicyContext`, returning such an object.
 
-Rules the core enforces (documented in README "Benchmark your own controller"):
+Rules the core enforces (documented in docs/plugins.md):
 
 * a plugin that raises, whose ``act`` returns the wrong shape, or that lacks ``reset``/``act`` stops
   the run with a one-line :class:`~pendulum_lqg.errors.PluginError` naming the plugin (the CLI exits
@@ -253,7 +253,7 @@ def guarded(ref: str, what: str, fn: Callable[..., Any], *args: Any, **kwargs: A
     :class:`PluginError` line naming the plugin and ``what``: every exception, ``SystemExit``
     (``sys.exit`` in a plugin) included, except a Ctrl-C (``KeyboardInterrupt``), which stops the
     run as a Ctrl-C does. A plugin cannot end the run with a success status or without a message
-    this way (``os._exit`` ends the process at once, uncatchable; README "Reliability")."""
+    this way (``os._exit`` ends the process at once, uncatchable; docs/reliability.md)."""
     try:
         return fn(*args, **kwargs)
     except (PluginError, KeyboardInterrupt):

@@ -66,7 +66,7 @@ def period_model(model: mujoco.MjModel, k: int) -> tuple[np.ndarray, np.ndarray]
 
 def make(env) -> PythonControlLQG:
     """The agent factory ``f(env)``: designs from the env's model, period, weights and noise."""
-    from pendulum_lqg.scoreboard.episodes import NotApplicable
+    from pendulum_lqg.errors import NotApplicable
 
     base = env.unwrapped
     if base.observation_mode != "measurement":

@@ -87,7 +87,7 @@ def load_pyplot() -> Any:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    # readable at README width: ~1000–1600 px wide PNGs, 11 pt text
+    # readable at a documentation page's width: ~1000–1600 px wide PNGs, 11 pt text
     plt.rcParams.update({"figure.dpi": 110, "savefig.dpi": 110, "font.size": 11,
                          "axes.titlesize": 11, "axes.labelsize": 11, "xtick.labelsize": 10,
                          "ytick.labelsize": 10, "axes.grid": True, "grid.alpha": 0.3,

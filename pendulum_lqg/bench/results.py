@@ -14,7 +14,7 @@ Layout of a results folder::
     episodes.csv     every episode row with its configuration (assembled at the end); first
                      column ``schema_version``
     summary.json     aggregates per configuration (success rate + Wilson CI, mean ± SE), with
-                     ``schema_version`` (README "Results schema")
+                     ``schema_version`` (docs/results.md)
     summary.md       the same as a Markdown table
     meta.json        timestamps and machine facts (kept apart so the data files are byte-identical
                      for the same seed)

@@ -136,7 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--policy", default=None, metavar="NAME",
                    help="the policy: a built-in 'controller+observer' (e.g. dlqr+kalman) or your "
                         "own plugin MODULE:ATTR or path/to/file.py:ATTR, a factory taking a "
-                        "pendulum_lqg.PolicyContext (README: Benchmark your own controller); "
+                        "pendulum_lqg.PolicyContext (docs/plugins.md); "
                         "default dlqr+kalman")
     p.add_argument("--controller", choices=CONTROLLERS, default=None,
                    help="built-in controller (default dlqr); not with --policy")
@@ -192,7 +192,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="run an experiment grid (experiments/*.toml)",
                        description="Run an experiment: a grid of configurations × seeded episodes "
                                    "(or an analysis study), written unit by unit into a results "
-                                   "folder and summarised. README: the experiment file format.")
+                                   "folder and summarised. See docs/experiment-files.md.")
     p.add_argument("experiment",
                    help="a shipped experiment (lecture, noise, plugins, …), NAME.toml in the "
                         "current folder, or a path to a TOML file")
@@ -202,7 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default=None, metavar="DIR",
                    help="results folder (default results/<name> under the current folder)")
     p.add_argument("--model", default=None, metavar="XML",
-                   help="your own cart-pole MJCF (README: the model contract) instead of the "
+                   help="your own cart-pole MJCF (docs/model.md) instead of the "
                         "experiment's model_file or the shipped models/cartpole.xml")
     p.add_argument("--force", action="store_true",
                    help="overwrite the results already in --out (default: refuse)")

@@ -21,15 +21,15 @@ def add_parsers(sub: Any, positive_int: Any) -> None:
                    help="built-in 'controller+observer' (e.g. dlqr+kalman) or plug-in MODULE:ATTR / "
                         "path.py:ATTR, run through the batch")
     p.add_argument("--agent", default=None, metavar="REF",
-                   help="a Gymnasium agent instead: MODULE:ATTR or path.py:ATTR naming a factory "
-                        "f(env) -> object with reset() and act(obs); or sb3:PATH.zip "
-                        "(a stable-baselines3 model, the rl extra)")
+                   help="a Gymnasium agent instead of POLICY (default: none): MODULE:ATTR or "
+                        "path.py:ATTR naming a factory f(env) -> object with reset() and act(obs); "
+                        "or sb3:PATH.zip (a stable-baselines3 model, the rl extra)")
     p.add_argument("--suite", action="append", default=None, metavar="NAME",
                    help="suite name or file (repeatable), or 'all' (the default): "
                         "full-state, lecture, mismatch, delayed, lossy, noisy, hard")
     p.add_argument("--episodes", type=positive_int, default=None, metavar="N",
-                   help="episodes per suite instead of the suite's own (a quick score; "
-                        "its fingerprint then differs from the full one)")
+                   help="episodes per suite (default: the suite's own, 100; fewer is a quick "
+                        "score whose fingerprint differs from the full one)")
     p.add_argument("--normalize-action", action="store_true",
                    help="Gymnasium agents act in [-1, 1] (the env's normalize_action)")
     p.add_argument("--nthread", type=positive_int, default=None,

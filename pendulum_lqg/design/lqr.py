@@ -87,7 +87,7 @@ def lqr(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, *,
 
     References
     ----------
-    Kalman (1960); python-control ``lqr``. THEORY.md §2, worked examples 1 and 2.
+    Kalman (1960); python-control ``lqr``. docs/theory.md §2, worked examples §5.1 and §5.2.
     """
     A, B = _plant(A, B, ("A", "B"))
     Q, R, N = _weights(Q, R, N, *B.shape)
@@ -198,7 +198,7 @@ def finite_horizon_dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: Array
 
     References
     ----------
-    Ogata, *Discrete-Time Control Systems*, §8-3 (THEORY.md §5, example 3).
+    Ogata, *Discrete-Time Control Systems*, §8-3 (docs/theory.md §5.3).
     """
     Phi, Gamma = _plant(Phi, Gamma, ("Phi", "Gamma"))
     n, m = Gamma.shape

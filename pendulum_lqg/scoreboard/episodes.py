@@ -25,17 +25,10 @@ import numpy as np
 from pendulum_lqg import ENV_ID, register_envs
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.seeding import episode_seeds
-from pendulum_lqg.errors import ConfigError, PluginError
+from pendulum_lqg.errors import ConfigError, NotApplicable, PluginError
 from pendulum_lqg.plant import load_plant
 from pendulum_lqg.plugins import build_policy, is_plugin_ref, load_factory
 from pendulum_lqg.scoreboard.suites import Suite
-
-
-class NotApplicable(ConfigError):
-    """A policy or agent that cannot play a suite as the suite is posed (it observes something else:
-    the true state where the suite gives only ``y``, or the reverse). Its score row for that suite
-    says so instead of a number. An agent factory may raise it to decline an env."""
-
 
 #: The fields of a scored episode row.
 ROW_FIELDS = ("episode", "seed", "success", "failure_reason", "cost")

@@ -28,7 +28,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from pendulum_lqg.errors import ConfigError, PluginError
+from pendulum_lqg.errors import ConfigError, NotApplicable, PluginError
 
 #: The algorithms a model file may name, and the package each comes from.
 ALGORITHMS = {"PPO": "stable_baselines3", "SAC": "stable_baselines3", "TD3": "stable_baselines3",
@@ -125,8 +125,6 @@ def sb3_agent(path_text: str) -> Any:
     trained_on = meta.get("env", {}).get("observation_mode", "measurement")
 
     def factory(env: gym.Env) -> SB3Agent:
-        from pendulum_lqg.scoreboard.episodes import NotApplicable
-
         mode = getattr(env.unwrapped, "observation_mode", None)
         if mode != trained_on:
             raise NotApplicable(f"agent sb3:{path_text} was trained on observation_mode = "

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from pendulum_lqg.core.metrics import mean_se, wilson_interval
+from pendulum_lqg.errors import NotApplicable
 from pendulum_lqg.scoreboard.suites import Suite
 
 #: Version of the score files' layout.
@@ -97,8 +98,6 @@ def score_document(policy: str, kind: str, suites: Sequence[Suite],
     "fingerprint", "rows"}}}``; a suite the entry cannot play as posed
     (:class:`~pendulum_lqg.scoreboard.episodes.NotApplicable`) has ``"applicable": false`` and the
     ``"reason"`` instead of the figures. ``kind`` is ``"builtin"``, ``"plugin"`` or ``"agent"``."""
-    from pendulum_lqg.scoreboard.episodes import NotApplicable
-
     entries: dict[str, Any] = {}
     for s in suites:
         try:
