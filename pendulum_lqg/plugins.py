@@ -40,7 +40,7 @@ import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -48,6 +48,7 @@ from pendulum_lqg.errors import ConfigError, PluginError
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.noise import NoiseModel
+    from pendulum_lqg.core.protocol import PolicyProtocol
     from pendulum_lqg.core.scenario import Scenario
     from pendulum_lqg.plant import Plant
     from pendulum_lqg.policy import DesignSpec
@@ -121,6 +122,14 @@ class PolicyContext:
 
 
 # ---- names ----------------------------------------------------------------------------------------
+class PolicyFactory(Protocol):
+    """What a plug-in reference ``MODULE:ATTR`` names: called once per batch with the design
+    context, it returns a policy of the protocol (:class:`~pendulum_lqg.core.protocol.PolicyProtocol`
+    and its optional members)."""
+
+    def __call__(self, context: PolicyContext, /) -> PolicyProtocol: ...
+
+
 def is_plugin_ref(name: str) -> bool:
     """``MODULE:ATTR`` / ``file.py:ATTR`` (a plugin) rather than ``controller+observer``."""
     return isinstance(name, str) and ":" in name
@@ -159,7 +168,7 @@ def _is_path(module: str) -> bool:
     return module.endswith(".py") or "/" in module or "\\" in module
 
 
-def load_factory(ref: str, *, base_dir: Path | None = None) -> Callable[[PolicyContext], Any]:
+def load_factory(ref: str, *, base_dir: Path | None = None) -> PolicyFactory:
     """Import the factory named by ``ref`` (``MODULE:ATTR`` or ``path/to/file.py:ATTR``).
 
     A file is imported as a module of its own, under a name derived from its path and its content
