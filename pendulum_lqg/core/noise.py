@@ -44,9 +44,9 @@ FIRST_PERIODS = 8
 
 #: Held while a batch's generators draw one after another (a noise refill, the initial states).
 #: Every numpy draw releases the GIL, so two threads doing hundreds of them at once (the shards of
-#: a run, all starting together) hand the GIL back and forth after each draw: two 512-row refills
-#: at once took 30 ms, one alone 10.8 ms (/tmp measurement, this 2-core machine). Taking turns,
-#: the second shard's draws run while the first shard's physics does (which holds no GIL).
+#: a run, all starting together) would hand the GIL back and forth after each draw, and both
+#: bursts would take as long as the two in turn, or longer. Taking turns, the second shard's draws
+#: run while the first shard's physics does (which holds no GIL).
 DRAW_LOCK = threading.Lock()
 
 #: The lecture's per-step process-noise covariance of w (``x ← x + T·w``) and its period.
