@@ -37,6 +37,7 @@ from scipy.linalg import expm
 from pendulum_lqg import design
 from pendulum_lqg._config import config_vector
 from pendulum_lqg.core.noise import NoiseModel
+from pendulum_lqg.core.rules import saturate
 from pendulum_lqg.design._checks import as_poles
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.estimators import (
@@ -166,7 +167,7 @@ class Policy:
     def act(self, y: np.ndarray) -> np.ndarray:
         """One control period: measurement (n, 2) (or state (n, 4)) → force (n,) in newtons."""
         x_hat = self.estimator.estimate(y)
-        u = np.minimum(np.maximum(-mv(self.K, x_hat), -self.u_max), self.u_max)   # np.clip's values
+        u = saturate(-mv(self.K, x_hat), self.u_max)    # the core's rule: the observer sees u applied
         self.estimator.update(u)
         return u[:, 0]
 
