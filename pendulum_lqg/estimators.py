@@ -33,7 +33,7 @@ from pendulum_lqg.errors import ShapeError
 
 def mv(M: np.ndarray, X: np.ndarray) -> np.ndarray:
     """Row-wise ``M @ x`` for a batch ``X`` (n, j) → (n, i); bitwise independent of n
-    (``np.einsum``'s C function, without its Python wrapper)."""
+    (``einsum`` sums each row on its own, with no BLAS kernel choosing by size)."""
     return np.einsum("ij,nj->ni", M, X)
 
 

@@ -67,16 +67,23 @@ def test_no_module_is_longer_than_600_lines():
     assert not long, long
 
 
-#: Private APIs of MuJoCo and numpy the package once used (``Batch``'s C++ core, numpy's C einsum).
-PRIVATE_API = re.compile(r"\._b\.|c_einsum|_multiarray_umath|numpy\._core|np\._core|mujoco\._"
-                         r"|_DIRECT_BATCH")
+#: Private APIs of MuJoCo and numpy (``Batch``'s C++ core and private methods, numpy's C einsum).
+PRIVATE_API = re.compile(r"\._b\.|batch\._[a-z]|c_einsum|_multiarray_umath|numpy\._core|np\._core"
+                         r"|mujoco\._[a-z]|_DIRECT_BATCH")
+
+#: The one private API kept, because a paired measurement shows it is worth more than 3 % of the
+#: path it serves (``benchmarks/env_benchmark.py``'s ``direct / public`` line; docs/performance.md):
+#: the held-force period calling ``Batch.rollout``'s C++ core, and the batch's own error check.
+JUSTIFIED = {("pendulum_lqg/core/physics/mujoco_batch.py",
+              "nfail = self.batch._b.rollout(rows.ids, self.k, None, spec, rows.records)"),
+             ("pendulum_lqg/core/physics/mujoco_batch.py", "self.batch._check(rows.ids, nfail)")}
 
 
 def test_the_package_uses_no_private_api_of_mujoco_or_numpy():
-    hits = [f"{p.relative_to(ROOT)}:{i}: {line.strip()}" for p in sorted(PKG.rglob("*.py"))
-            for i, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
-            if PRIVATE_API.search(line)]
-    assert not hits, "\n".join(hits)
+    code = ((str(p.relative_to(ROOT)), line.split("#")[0].strip()) for p in sorted(PKG.rglob("*.py"))
+            for line in p.read_text(encoding="utf-8").splitlines())      # comments may name them
+    hits = {(f, line) for f, line in code if PRIVATE_API.search(line)}
+    assert hits == JUSTIFIED, "\n".join(f"{f}: {line}" for f, line in sorted(hits ^ JUSTIFIED))
 
 
 def test_the_rules_of_a_period_are_defined_once_in_core_rules():

@@ -47,7 +47,7 @@ class StepResult:
     ----------
     x : (n, 4) true state at the end of the period (after state noise)
     cost : (n,) cost accumulated over the period
-    failed : (n,) bool, the episode ended in this period
+    failed : (n,) bool, the episode ended in this period (read-only, as ``reason``)
     reason : (n,) int failure codes (``rules.FAIL_*``)
     states : (n, k, 4) physics-rate states over the period (a view, valid until the next step)
     requested : (n,) the requested force after saturation (before the actuator's delay line
@@ -309,7 +309,10 @@ class Simulator:
         v.start[...] = self.x
         forces = self.noise.forces(self._w) if self._force_noise else None
         reset = self._physics.advance(self.x, command if steps is None else steps, forces, v)
-        v.u[...] = command[:, None] if steps is None else steps      # after the physics
+        if steps is None:                              # after the physics (see PeriodView.direct)
+            v.u_by_step[...] = command
+        else:
+            v.u[...] = steps
         rules.end_of_period(v, self._w if self._state_noise else None)
         return v, command, reset
 

@@ -60,10 +60,12 @@ class PeriodView:
     """The first ``n`` rows of a :class:`PeriodBuffer`, cut into named views.
 
     ``buf`` (n, k+2, 5); ``z`` (n, k, 5) ``[x, u]`` at the start of each physics step; ``states``
-    (n, k, 4) the state after each step; ``u`` (n, k) the force of each step; ``start``, ``last``,
-    ``end`` (n, 4) the state at the start, after the k-th step and at the end of the period. For
+    (n, k, 4) the state after each step; ``u`` (n, k) the force of each step (``u_by_step``, its
+    transpose); ``start``, ``last``, ``end`` (n, 4) the state at the start, after the k-th step
+    and at the end of the period. For
     the fast failure check: ``flat`` the rows as one run of numbers, ``bounds`` a bound per
-    number, ``scratch`` and ``inside`` its work arrays.
+    number, ``scratch`` and ``inside`` its work arrays. ``direct`` (1, k, 5), for one row only
+    (else ``None``): the buffer's numbers 4 … 4+5k−1, where a backend may record in place.
     """
 
     def __init__(self, period: PeriodBuffer, n: int) -> None:
@@ -71,7 +73,12 @@ class PeriodView:
         self.n, self.k = n, k
         self.buf = b = period.buf[:n]
         self.z, self.states, self.u = b[:, :k], b[:, 1:k + 1, :4], b[:, :k, 4]
+        self.u_by_step = self.u.T                     # (k, n): a held force (n,) broadcasts in
         self.start, self.last, self.end = b[:, 0, :4], b[:, k, :4], b[:, k + 1, :4]
         size = b.size
         self.flat, self.bounds = b.reshape(-1), period.bounds[:size]
         self.scratch, self.inside = period.scratch[:size], period.inside[:size]
+        # One row: its u at step 0 and rows 1 … k are one C-contiguous run of 5k numbers, which
+        # read as k records [·, p, θ, ṗ, θ̇] — a backend recording [time, qpos, qvel] after each
+        # step can write them in place (the times land in the u column, overwritten by the loop).
+        self.direct = b.reshape(-1)[4:4 + 5 * k].reshape(1, k, 5) if n == 1 else None

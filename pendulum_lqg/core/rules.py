@@ -31,6 +31,7 @@ noise).
 
 from __future__ import annotations
 
+import functools
 from typing import TYPE_CHECKING, overload
 
 import numpy as np
@@ -104,14 +105,14 @@ def detect_failure(view: PeriodView, reset: np.ndarray, *, theta_max: float, tra
 
     Returns
     -------
-    failed : (n,) bool; reason : (n,) int8 ``FAIL_*`` codes; fail_step : (n,) the first failing
-    physics step 0 … k−1 (``k`` for rows that did not fail), or ``None`` when no row failed
+    failed : (n,) bool; reason : (n,) int8 ``FAIL_*`` codes (both read-only); fail_step : (n,)
+    the first failing physics step 0 … k−1 (``k`` for rows that did not fail), or ``None`` when
+    no row failed
     """
     n, k = view.n, view.k
-    failed = np.zeros(n, dtype=bool)
-    reason = np.zeros(n, dtype=np.int8)                      # FAIL_NONE is 0
     if n == 0 or (bad_force is None and np.count_nonzero(reset) == 0 and all_inside(view)):
-        return failed, reason, None
+        return _none_failed(n)
+    reason = np.zeros(n, dtype=np.int8)                      # FAIL_NONE is 0
     with np.errstate(invalid="ignore"):
         mag = np.abs(view.states)                            # (n, k, 4) after each step
         # ``not (|x| <= RUNAWAY)`` is true for nan, inf and runaway values alike
@@ -130,7 +131,17 @@ def detect_failure(view: PeriodView, reset: np.ndarray, *, theta_max: float, tra
     idx = np.nonzero(failed)[0]
     s = fail_step[idx]
     reason[idx] = np.where(bad[idx, s], FAIL_DIVERGED, np.where(pole[idx, s], FAIL_POLE, FAIL_TRACK))
+    failed.flags.writeable = reason.flags.writeable = False
     return failed, reason, fail_step
+
+
+@functools.lru_cache(maxsize=64)
+def _none_failed(n: int) -> tuple[np.ndarray, np.ndarray, None]:
+    """:func:`detect_failure`'s answer when no row of ``n`` failed: made once per ``n`` (the
+    common case of every period) and shared, hence read-only."""
+    failed, reason = np.zeros(n, dtype=bool), np.zeros(n, dtype=np.int8)
+    failed.flags.writeable = reason.flags.writeable = False
+    return failed, reason, None
 
 
 # ---- cost ---------------------------------------------------------------------------------------

@@ -5,9 +5,11 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import mujoco
 import numpy as np
 import pytest
 
+from pendulum_lqg.core import rules
 from pendulum_lqg.core.loop import Simulator
 from pendulum_lqg.core.metrics import summarize, wilson_interval
 from pendulum_lqg.core.noise import NoiseModel, NoiseStream
@@ -277,6 +279,20 @@ def test_a_diverging_row_fails_alone(plant):
     assert [r["failure_reason"] for r in rows] == ["", "", ""]
 
 
+@pytest.mark.parametrize("backend", ["rollout", "step"])
+def test_a_reused_row_detects_every_mujoco_reset(plant, backend):
+    """A row whose simulation MuJoCo reset after an instability, then serves a new episode (the
+    single env, a vector env's sub-env) that also blows up at the first physics step: the second
+    reset is detected too (``diverged``), not read as a cart at rest upright."""
+    sc = LECTURE.replace(duration=1.0, noise=NoiseModel.lecture(scale=0.0))
+    bad = np.array([[0.0, 0.0, 0.0, 1e300]])          # MuJoCo resets it in the first step
+    with Simulator(plant, sc, backend=backend, streamed_metrics=False) as sim:
+        for _ in range(3):
+            sim.reset([np.random.default_rng(0)], initial_states=bad)
+            sim.measure()
+            assert sim.step_one(0.0)[1] == rules.FAIL_DIVERGED
+
+
 def test_absurd_noise_is_counted_as_divergence_and_the_batch_completes(plant):
     sc = LECTURE.replace(noise=NoiseModel.lecture(scale=1e9), duration=1.0)
     rows = _run(plant, sc, "dlqr", "kalman", 5).rows
@@ -394,3 +410,32 @@ def test_batch_physics_aligned_and_general_record_copies_agree(plant):
     assert np.array_equal(resets[0], resets[1]) and resets[0].tolist() == [False, False, True,
                                                                               False, False]
     assert np.all(np.abs(bufs[0][:, 1:k + 1, :4] - x[:, None, :])[[0, 1, 3, 4]] > 0)   # it moved
+
+
+@pytest.mark.parametrize("n", [1, 5])
+def test_batch_physics_direct_and_public_rollout_agree(plant, n):
+    """The held-force period through the batch's C++ core (``direct_call``, on MuJoCo 4.0) and
+    through the public ``Batch.rollout``: the same states bit for bit and the same resets — for
+    one row (recorded in place into the period buffer) and for several (an instability in one)."""
+    from pendulum_lqg.core.period import PeriodBuffer
+    from pendulum_lqg.core.physics import BatchPhysics
+    from pendulum_lqg.core.physics.mujoco_batch import DIRECT_CALL
+
+    assert DIRECT_CALL == mujoco.__version__.startswith("4.0.")
+    k = 10
+    rng = np.random.default_rng(4)
+    x = rng.normal(scale=0.2, size=(n, 4))
+    x[-1, 3] = 1e300 if n > 1 else x[-1, 3]          # MuJoCo resets the last of several rows
+    u = rng.uniform(-10, 10, n)
+    bufs, resets = [], []
+    for direct in (True, False):
+        phys = BatchPhysics(plant, n, 1, k)
+        phys.direct_call = direct
+        period = PeriodBuffer(n, k, np.ones(5))
+        for _ in range(2):                           # the second call reuses the cached views
+            resets.append(phys.advance(x, u, None, period.view(n)).copy())
+        bufs.append(period.buf.copy())
+    assert np.array_equal(bufs[0], bufs[1])
+    assert all(np.array_equal(r, resets[0]) for r in resets), resets
+    assert resets[0].tolist() == [False] * (n - 1) + [n > 1]
+    assert np.all(bufs[0][:n - 1 or 1, 1:k + 1, :4] != x[:n - 1 or 1, None, :])          # it moved

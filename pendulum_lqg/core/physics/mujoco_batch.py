@@ -16,6 +16,16 @@ if TYPE_CHECKING:
     from pendulum_lqg.plant import Plant
 
 
+#: Whether a held-force period calls ``Batch.rollout``'s C++ core (``batch._b.rollout``) directly:
+#: only on the MuJoCo release whose wrapper was read (4.0), where the wrapper does nothing for our
+#: arguments but check them — and they are valid by construction (ids 0 … n−1 or None, one
+#: C-contiguous float64 record array of the shape the call fills, no control array). This is the
+#: package's one private API, kept because it is worth more than 3 % of ``env.step``:
+#: ``benchmarks/env_benchmark.py`` measures the two calls paired and prints the ratio, and
+#: ``docs/performance.md`` records it. On any other release the public method runs.
+DIRECT_CALL: bool = mujoco.__version__.startswith("4.0.")
+
+
 class BatchPhysics:
     """The :class:`~pendulum_lqg.core.physics.base.Physics` of a batch of rows on ``mujoco.batch``.
 
@@ -84,7 +94,10 @@ class BatchPhysics:
         self.ctrl_buf = np.zeros((capacity, k, ncontrol))
         self.force_cols = 1 + plant.qvel_index             # qfrc_applied's columns in a control row
         self.reset_before = (k - 0.5) * plant.timestep
-        self._ids: dict[int, np.ndarray | None] = {capacity: None}       # None: every simulation
+        self._cache: dict[int, _Rows] = {}
+        #: Call the batch's C++ core for held forces (see :data:`DIRECT_CALL`); ``False``: always
+        #: the public ``Batch.rollout`` (the benchmark that justifies the direct call flips it).
+        self.direct_call = DIRECT_CALL
 
     def set_models(self, models: list[mujoco.MjModel]) -> None:
         """Run row i on ``models[i]`` (randomised models); rows beyond them run the nominal one."""
@@ -93,35 +106,40 @@ class BatchPhysics:
     def advance(self, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None,
                 out: PeriodView) -> np.ndarray:
         """See :meth:`Physics.advance <pendulum_lqg.core.physics.base.Physics.advance>`."""
-        n = out.n
-        state = self.batch.state[:n]
-        state[:, self.dynamic] = self.state0_dynamic         # mj_resetData's values
-        state[:, self.x_cols] = x
+        rows = self._rows(out)
+        rows.dynamic[...] = self.state0_dynamic              # mj_resetData's values,
+        rows.warning[...] = 0                                # its warnings too (see _Rows)
+        if rows.x is not None:
+            rows.x[...] = x
+        else:                                               # x's columns are not consecutive
+            rows.state[:, self.x_cols] = x
         control, spec = None, self.control_spec
         if forces is not None:                              # per-step inputs: a control array
-            control = self.ctrl_buf[:n]
+            control = rows.control
             control[:, :, 0] = u[:, None] if u.ndim == 1 else u
             control[:, :, self.force_cols] = forces
             spec = self.force_control_spec
         elif u.ndim == 2:                                   # a force per step (actuator lag)
             control = u[:, :, None]
         else:
-            state[:, self.ctrl_col] = u                     # held: set once in the state
-        if n not in self._ids:
-            self._ids[n] = np.arange(n, dtype=np.int32)
-        ids = self._ids[n]
-        buf = out.buf
-        if self.aligned and n == 1 and buf.flags.c_contiguous:
-            # one row: its k records are one C-contiguous run of the buffer — record into it
-            direct = buf.reshape(-1)[4:4 + 5 * self.k].reshape(1, self.k, 5)
-            self.batch.rollout(self.k, control, control_spec=spec, record=(self.record_spec,),
-                               ids=ids, out={self.record_spec: direct})
+            rows.ctrl[...] = u                              # held: set once in the state
+        if control is None and self.direct_call:
+            nfail = self.batch._b.rollout(rows.ids, self.k, None, spec, rows.records)
+            if nfail:
+                self.batch._check(rows.ids, nfail)           # raises mujoco.batch.SimulationError
         else:
-            rec = self.rec[:n]
             self.batch.rollout(self.k, control, control_spec=spec, record=(self.record_spec,),
-                               ids=ids, out={self.record_spec: rec})
-            self._store(buf, rec)
-        return state[:, 0] < self.reset_before
+                               ids=rows.ids, out=rows.out)
+        if not rows.in_place:
+            self._store(out.buf, rows.rec)
+        return rows.time < self.reset_before
+
+    def _rows(self, view: PeriodView) -> _Rows:
+        """The views of the batch's first ``view.n`` simulations, made once per period view."""
+        rows = self._cache.get(view.n)
+        if rows is None or rows.view is not view:
+            rows = self._cache[view.n] = _Rows(self, view)
+        return rows
 
     def _store(self, buf: np.ndarray, rec: np.ndarray) -> None:
         """The k records of each row into rows 1 … k, columns 0 … 3, of the period buffer ``buf``.
@@ -132,3 +150,40 @@ class BatchPhysics:
             buf.reshape(n, -1)[:, 4:4 + 5 * k] = rec.reshape(n, -1)
         else:
             buf[:, 1:k + 1, :4] = rec[:, :, self.rec_cols]
+
+
+class _Rows:
+    """What :meth:`BatchPhysics.advance` writes and passes for the first ``n`` simulations of the
+    batch, recording into the period view ``view`` — views made once, since slicing costs as much
+    as the small copies made through the slices.
+
+    * ``state``: the state rows; ``dynamic``, ``x``, ``ctrl``, ``time``: their columns reset each
+      period, the ``[p, θ, ṗ, θ̇]`` columns (``None`` when not consecutive: no view addresses
+      them), the held control and the time;
+    * ``warning``: the simulations' warning counters, zeroed each period as ``mj_resetData``
+      zeroes them. The batch stops a simulation (and :meth:`BatchPhysics.advance` reports its
+      reset) when a counter rises; a counter left at 1 by an earlier instability would not rise
+      when MuJoCo resets the data again, and the reset state would pass for a cart at rest;
+    * ``control``: the per-step control buffer; ``ids``: the simulations 0 … n−1 for
+      ``Batch.rollout`` (``None`` when they are all of the batch's);
+    * ``rec``, ``out``, ``records``: where the rollout records, as the public call and the C++ core
+      take it — in place into the period buffer (``in_place``: aligned layout and one row,
+      ``view.direct``), else into scratch that :meth:`BatchPhysics._store` copies.
+    """
+
+    def __init__(self, physics: BatchPhysics, view: PeriodView) -> None:
+        n = view.n
+        state = physics.batch.state[:n]
+        self.view, self.state = view, state
+        self.dynamic = state[:, physics.dynamic]
+        cols = physics.x_cols
+        self.x = state[:, cols] if isinstance(cols, slice) else None     # a view, or no view
+        self.ctrl, self.time = state[:, physics.ctrl_col], state[:, 0]
+        self.warning = physics.batch.warning[:n]
+        self.control = physics.ctrl_buf[:n]
+        self.ids = None if n == physics.capacity else np.arange(n, dtype=np.int32)
+        direct = view.direct if physics.aligned else None
+        self.in_place = direct is not None
+        self.rec: np.ndarray = physics.rec[:n] if direct is None else direct
+        self.out = {physics.record_spec: self.rec}
+        self.records = [(None, physics.record_spec, self.rec)]     # the C++ core's form of out
