@@ -12,7 +12,11 @@ one ``mujoco.rollout`` call of one row, and one ``mujoco.batch`` ``Batch.step`` 
 (what the simulation core steps), no Python around them — the share of ``env.step`` no
 bookkeeping can remove. A third env, ``CartPoleLQG-v0 via step()``, is ours with its one-row
 period taken through the batch entry ``Simulator.step`` (which builds a ``StepResult``) instead of
-``Simulator.step_one``: the paired ratio says what the single env's lean entry is worth.
+``Simulator.step_one``: the paired ratio says what the single env's lean entry is worth. A fourth,
+``CartPoleLQG-v0 via public rollout``, is ours with its physics calling the public
+``Batch.rollout`` for every period instead of the batch's C++ core
+(:data:`pendulum_lqg.core.physics.mujoco_batch.DIRECT_CALL`): the paired ratio says what the
+package's one private API is worth (it is kept only while it is worth ≥ 1.03×).
 
 Usage::
 
@@ -76,6 +80,14 @@ def through_batch_step(env: gym.Env) -> gym.Env:
     return env
 
 
+def through_public_rollout(env: gym.Env) -> gym.Env:
+    """``env`` with its physics taking the public ``Batch.rollout`` for every period (the same
+    numbers: ``tests/core/physics/test_mujoco_batch.py`` checks the two calls)."""
+    env.reset(seed=0)                                   # makes the simulator's physics
+    env.unwrapped._sim._physics.direct_call = False
+    return env
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=10000, help="env steps per env and round")
@@ -90,8 +102,10 @@ def main() -> None:
     theirs = gym.make("InvertedPendulum-v5", frame_skip=k)
     assert theirs.unwrapped.frame_skip == k
     generic = through_batch_step(gym.make(pendulum_lqg.ENV_ID))
+    public = through_public_rollout(gym.make(pendulum_lqg.ENV_ID))
     runners = {"CartPoleLQG-v0": Runner(ours, agent), "InvertedPendulum-v5": Runner(theirs, None),
-               "CartPoleLQG-v0 via step()": Runner(generic, LQGAgent(generic))}
+               "CartPoleLQG-v0 via step()": Runner(generic, LQGAgent(generic)),
+               "CartPoleLQG-v0 via public rollout": Runner(public, LQGAgent(public))}
     block = max(1, args.steps // args.blocks)
     for runner in runners.values():                  # warm-up
         runner.reset(seed=1)
@@ -131,6 +145,11 @@ def main() -> None:
     print(f"{'step_one / step()':>20}: {float(np.median(lean)):.3f}× (env.step through the one-row "
           f"entry vs through Simulator.step, median of the rounds' ratios, "
           f"{min(lean):.3f}–{max(lean):.3f}; the entry is kept only if ≥ 1.03×)")
+    direct = [a / b for a, b in zip(runs["CartPoleLQG-v0"],
+                                    runs["CartPoleLQG-v0 via public rollout"], strict=True)]
+    print(f"{'direct / public':>20}: {float(np.median(direct)):.3f}× (env.step with the batch's "
+          f"C++ core called directly vs through the public Batch.rollout, median of the rounds' "
+          f"ratios, {min(direct):.3f}–{max(direct):.3f}; the direct call is kept only if ≥ 1.03×)")
 
 if __name__ == "__main__":
     main()
