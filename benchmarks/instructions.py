@@ -1,0 +1,119 @@
+"""Instructions executed per env step, vector step or closed-loop run, counted by Valgrind.
+
+Wall and CPU time on a shared VM vary by ±20 % between runs minutes apart; the number of
+instructions a piece of Python executes does not vary at all. This script runs one workload under
+``valgrind --tool=callgrind`` with counting switched on only around the timed part (after imports,
+set-up and a warm-up), so two versions of the package can be compared to the instruction:
+
+* ``env`` — ``--steps`` calls of ``env.step`` of ``pendulum_lqg/CartPoleLQG-v0`` with a fixed force
+  of 0.1 N from the upright at rest (the state is put back before each step, so every step does
+  the same work): what the single env's Python costs on top of its 10 physics steps;
+* ``vector`` — ``--steps`` steps of the native vector env (64 envs) driven by the LQG agent;
+* ``loop`` — one ``run_episodes`` of ``--episodes`` DLQR + Kalman episodes of 2 s, one thread.
+
+Instructions are not time — a cache miss costs more than an add — but a difference in
+instructions of the Python around the physics is a difference in work. ``--tree`` runs another
+checkout's package (a ``git worktree`` of an older version) with this environment's libraries.
+
+Usage::
+
+    uv run python benchmarks/instructions.py env [--steps 1000] [--tree PATH]
+    uv run python benchmarks/instructions.py vector [--steps 100]
+    uv run python benchmarks/instructions.py loop [--episodes 64]
+
+It needs ``valgrind`` on the PATH (``apt-get install valgrind``); a run takes a minute or two.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+
+
+def workload(kind: str, count: int) -> None:
+    """Run the workload, counting only its timed part (called inside Valgrind)."""
+    import gymnasium as gym
+    import numpy as np
+
+    import pendulum_lqg
+
+    def counting(on: bool) -> None:
+        subprocess.run(["callgrind_control", "-i", "on" if on else "off", str(os.getpid())],
+                       capture_output=True, check=False)
+
+    if kind == "env":
+        env = gym.make(pendulum_lqg.ENV_ID)
+        env.reset(seed=1)
+        sim = env.unwrapped._sim
+        action = np.array([0.1])
+
+        def run(n: int) -> None:
+            for _ in range(n):
+                sim.x[...] = 0.0
+                sim.period[0] = 0
+                env.step(action)
+    elif kind == "vector":
+        from pendulum_lqg.agent import LQGAgent
+        vec = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=64)
+        agent = LQGAgent(vec)
+        obs = [vec.reset(seed=1)[0]]
+        agent.reset()
+
+        def run(n: int) -> None:
+            for _ in range(n):
+                obs[0] = vec.step(agent.act(obs[0]))[0]
+    else:
+        from pendulum_lqg.plant import load_plant
+        from pendulum_lqg.policy import DesignSpec, design_policy
+        from pendulum_lqg.sim import Scenario, run_episodes
+        plant, sc = load_plant(), Scenario(duration=2.0)
+        policy = design_policy(plant, sc.control_period, sc.noise, DesignSpec("dlqr", "kalman"))
+
+        def run(n: int) -> None:
+            run_episodes(plant, sc, policy, seed=0, episodes=range(n), nthread=1)
+    run(max(1, count // 10))                                    # warm-up, not counted
+    counting(True)
+    run(count)
+    counting(False)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("kind", choices=["env", "vector", "loop"])
+    ap.add_argument("--steps", type=int, default=None, help="env or vector steps (1000 / 100)")
+    ap.add_argument("--episodes", type=int, default=64, help="loop: episodes")
+    ap.add_argument("--tree", default=None, help="a checkout whose pendulum_lqg to run")
+    ap.add_argument("--inner", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    count = args.episodes if args.kind == "loop" else (args.steps or
+                                                       (1000 if args.kind == "env" else 100))
+    if args.inner:
+        workload(args.kind, count)
+        return
+    if shutil.which("valgrind") is None:
+        sys.exit("instructions: valgrind is not on the PATH (apt-get install valgrind)")
+    env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
+    if args.tree:
+        env["PYTHONPATH"] = os.path.abspath(args.tree)
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no",
+               f"--callgrind-out-file={tmp}/callgrind.out", sys.executable, os.path.abspath(__file__),
+               args.kind, "--inner", "--steps", str(count), "--episodes", str(count)]
+        done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
+    found = re.search(r"I\s+refs:\s+([\d,]+)", done.stderr)
+    if done.returncode != 0 or found is None:
+        sys.exit(f"instructions: the valgrind run failed:\n{done.stderr[-2000:]}")
+    total = int(found.group(1).replace(",", ""))
+    what = {"env": "env.step", "vector": "vector step (64 envs, with the agent)",
+            "loop": "episode (2 s, DLQR + Kalman, one thread)"}[args.kind]
+    print(f"{args.kind}: {total / count / 1e3:,.1f} k instructions per {what} "
+          f"({total:,} over {count}; package from {args.tree or 'this checkout'})")
+
+
+if __name__ == "__main__":
+    main()
