@@ -83,3 +83,17 @@ def assert_close_to_stored(now, stored, where="stored"):
             a, b, rel_tol=STORED_RTOL, abs_tol=STORED_ATOL), f"{where}: {a!r} vs stored {b!r}"
     else:
         assert a == b, f"{where}: {a!r} vs stored {b!r}"
+
+
+#: ``python -c`` code running the CLI with Ctrl-C raising ``KeyboardInterrupt``: a process started
+#: from a background job begins with SIGINT ignored, as does every child it starts, and Python
+#: installs its own handler only when SIGINT is at its default — so a test that interrupts a CLI
+#: run would see it finish instead, whenever pytest itself runs in the background.
+_INTERRUPTIBLE_CLI = ("import runpy, signal; signal.signal(signal.SIGINT, signal.default_int_handler); "
+                      "runpy.run_module('pendulum_lqg.cli', run_name='__main__', alter_sys=True)")
+
+
+def interruptible_cli(*args):
+    """The command line of ``python -m pendulum_lqg.cli ARGS`` that a SIGINT interrupts."""
+    import sys
+    return [sys.executable, "-c", _INTERRUPTIBLE_CLI, *map(str, args)]

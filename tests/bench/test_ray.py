@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 import pytest
+from conftest import interruptible_cli
 
 from pendulum_lqg.bench.experiments import load_spec, parse_spec
 from pendulum_lqg.bench.sweep import run_sweep
@@ -101,8 +102,8 @@ def test_two_node_cluster_losing_a_node_mid_sweep_completes_identically(ray_modu
 @pytest.mark.slow
 def test_interrupted_ray_sweep_resumes_to_identical_results(ray_module, local_results, tmp_path):
     out = tmp_path / "interrupted"
-    cmd = [sys.executable, "-m", "pendulum_lqg.cli", "bench", "lecture", "--episodes", "20",
-           "--out", str(out), "--quiet", "--executor", "ray"]
+    cmd = interruptible_cli("bench", "lecture", "--episodes", "20", "--out", out, "--quiet",
+                            "--executor", "ray")
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and len(list((out / "units").glob("*.csv"))) < 2:

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import interruptible_cli
 
 from pendulum_lqg.cli import main
 
@@ -177,7 +178,7 @@ def test_bench_resume_after_sigint_matches_uninterrupted(tmp_path):
     spec.write_text(SMALL.replace("episodes = 6", "episodes = 40").replace("duration = 1.0",
                                                                            "duration = 3.0"))
     ref, part = tmp_path / "ref", tmp_path / "part"
-    cmd = [sys.executable, "-m", "pendulum_lqg.cli", "bench", str(spec), "--quiet"]
+    cmd = interruptible_cli("bench", spec, "--quiet")
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     subprocess.run([*cmd, "--out", str(ref)], check=True, cwd=ROOT, env=env,
                    capture_output=True)
