@@ -57,10 +57,7 @@ def test_local_ray_with_2_cpus_is_byte_identical(ray_module, local_results, tmp_
     assert result.complete and result.units_run == 10
     assert _files(out) == _files(local_results)
     assert not ray_module.is_initialized()          # the instance started for the run is gone
-    # the same through the command line
-    assert main(["bench", "lecture", "--episodes", "20", "--out", str(tmp_path / "cli"),
-                 "--quiet", "--executor", "ray"]) == 0
-    assert _files(tmp_path / "cli") == _files(local_results)
+    # (the command line's --executor ray: the interrupted-sweep and failing-unit tests below)
 
 
 @pytest.mark.slow

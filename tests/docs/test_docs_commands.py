@@ -19,7 +19,8 @@ What is collected, from the fenced blocks of README.md and docs/*.md:
   folders are linked there, so that a command naming them finds them.
 
 README's commands and examples, the plain ``design``, ``--help`` and ``--version`` are the quick set
-(about 45 s); the other pages' commands and examples are marked ``slow``.
+(about 45 s); the other pages' commands and examples are marked ``slow``. The selected commands
+and examples run two at a time, once per session (module fixtures), and each test checks its own.
 """
 
 from __future__ import annotations
@@ -212,9 +213,34 @@ def _run(argv, cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run(argv, cwd=cwd, capture_output=True, text=True, timeout=TIMEOUT_S, env=env)
 
 
+def _selected(request, test_name: str, param: str) -> list:
+    """The parameters ``param`` of the tests ``test_name`` that this session runs (after ``-m`` /
+    ``-k`` selection), in order."""
+    return [item.callspec.params[param] for item in request.session.items
+            if getattr(item, "originalname", None) == test_name and hasattr(item, "callspec")]
+
+
+def _run_all(jobs: dict, workers: int = 2) -> dict:
+    """``_run(argv, cwd)`` of every job ``key → (argv, cwd)``, ``workers`` at a time. The pages'
+    commands are independent processes, most of whose time is Python starting and importing:
+    two at once keep both cores of a CI machine busy. Returns ``key → CompletedProcess``."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        futures = {key: pool.submit(_run, argv, cwd) for key, (argv, cwd) in jobs.items()}
+        return {key: f.result() for key, f in futures.items()}
+
+
+@pytest.fixture(scope="module")
+def short_runs(request, workdir) -> dict:
+    """The selected short commands, run (two at a time) in the scratch folder, by argv."""
+    cmds = _selected(request, "test_short_commands_run", "cmd")
+    return _run_all({c.argv: ([*_cli(), *c.argv], workdir) for c in cmds})
+
+
 @pytest.mark.parametrize("cmd", _params(_unique([c for c in COMMANDS if _is_short(c)])))
-def test_short_commands_run(cmd, workdir):
-    proc = _run([*_cli(), *cmd.argv], workdir)
+def test_short_commands_run(cmd, short_runs):
+    proc = short_runs[cmd.argv]
     out = proc.stdout
     assert proc.returncode == 0, f"{cmd.where}: {cmd.text!r} exited {proc.returncode}:\n{proc.stderr}"
     argv = cmd.argv
@@ -248,13 +274,25 @@ def test_short_commands_run(cmd, workdir):
 EXAMPLES = [b for b in BLOCKS if b.lang == "python" and b.marker == "test"]
 
 
+@pytest.fixture(scope="module")
+def example_runs(request, tmp_path_factory) -> dict:
+    """The selected examples, each run as a script in a scratch folder of its own (two at a
+    time), by page and line."""
+    jobs = {}
+    for block in _selected(request, "test_python_examples_run_and_print_what_the_page_says",
+                           "block"):
+        folder = tmp_path_factory.mktemp("example")
+        script = folder / "example.py"
+        script.write_text(block.body, encoding="utf-8")
+        jobs[block.where] = ([sys.executable, str(script)], folder)
+    return _run_all(jobs)
+
+
 @pytest.mark.parametrize("block", [
     pytest.param(b, id=b.where, marks=() if b.page.name == "README.md" else pytest.mark.slow)
     for b in EXAMPLES])
-def test_python_examples_run_and_print_what_the_page_says(block, tmp_path):
-    script = tmp_path / "example.py"
-    script.write_text(block.body, encoding="utf-8")
-    proc = _run([sys.executable, str(script)], tmp_path)
+def test_python_examples_run_and_print_what_the_page_says(block, example_runs):
+    proc = example_runs[block.where]
     assert proc.returncode == 0, f"{block.where}:\n{proc.stderr}"
     if block.next_lang == "text":
         assert proc.stdout.strip() == block.next_body.strip(), f"{block.where}: printed\n{proc.stdout}"
