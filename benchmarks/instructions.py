@@ -1,7 +1,7 @@
 """Instructions executed per env step, vector step or closed-loop run, counted by Valgrind.
 
-Wall and CPU time on a shared VM vary by ±20 % between runs minutes apart; the number of
-instructions a piece of Python executes does not vary at all. This script runs one workload under
+Wall and CPU time on a shared VM vary between runs by more than a small change of the code moves
+them; the number of instructions a piece of Python executes does not vary at all. This script runs one workload under
 ``valgrind --tool=callgrind`` with counting switched on only around the timed part (after imports,
 set-up and a warm-up), so two versions of the package can be compared to the instruction:
 
