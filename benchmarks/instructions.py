@@ -1,9 +1,10 @@
 """Instructions executed per env step, vector step or closed-loop run, counted by Valgrind.
 
 Wall and CPU time on a shared VM vary between runs by more than a small change of the code moves
-them; the number of instructions a piece of Python executes does not vary at all. This script runs one workload under
-``valgrind --tool=callgrind`` with counting switched on only around the timed part (after imports,
-set-up and a warm-up), so two versions of the package can be compared to the instruction:
+them; the number of instructions a piece of Python executes does not vary at all. This script
+runs one workload under ``valgrind --tool=callgrind`` with counting switched on only around the
+timed part (after imports, set-up and a warm-up), so two versions of the package can be compared
+to the instruction:
 
 * ``env`` — ``--steps`` calls of ``env.step`` of ``pendulum_lqg/CartPoleLQG-v0`` with a fixed force
   of 0.1 N from the upright at rest (the state is put back before each step, so every step does
