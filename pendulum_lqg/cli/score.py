@@ -50,8 +50,6 @@ def cmd_score(args: argparse.Namespace) -> int:
     from pendulum_lqg.scoreboard.score import score_entry
     from pendulum_lqg.scoreboard.suites import load_suite, suite_names
 
-    if (args.policy is None) == (args.agent is None):
-        raise ConfigError("score: give one POLICY or one --agent REF")
     wanted = args.suite or ["all"]
     names = suite_names() if "all" in wanted else wanted
     suites = [load_suite(n).with_episodes(args.episodes) for n in names]
