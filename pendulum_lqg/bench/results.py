@@ -18,7 +18,8 @@ Layout of a results folder::
     summary.md       the same as a Markdown table
     meta.json        timestamps and machine facts (kept apart so the data files are byte-identical
                      for the same seed)
-    .lock            present while a run writes into the folder
+    .lock            present while a run writes into the folder (an flock on it, which the system
+                     drops when the run ends however it ends; :class:`~pendulum_lqg.files.FileLock`)
 """
 
 from __future__ import annotations
@@ -26,7 +27,6 @@ from __future__ import annotations
 import csv
 import hashlib
 import json
-import os
 import shutil
 import time
 from collections.abc import Callable
@@ -38,7 +38,7 @@ from pendulum_lqg import SCHEMA_VERSION, __version__
 from pendulum_lqg.bench.experiments import check_name
 from pendulum_lqg.core.metrics import EPISODE_FIELDS, summarize
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.files import atomic_write, read_csv, rows_to_csv
+from pendulum_lqg.files import FileLock, atomic_write, read_csv, rows_to_csv
 
 if TYPE_CHECKING:
     from pendulum_lqg.bench.experiments import ExperimentSpec, WorkUnit
@@ -83,7 +83,7 @@ class ResultsDir:
         self.path = Path(path)
         self.units_dir = self.path / "units"
         self.lock = self.path / ".lock"
-        self._locked = False
+        self._lock = FileLock(self.lock, where=f"out: {self.path}")
         self._spec: ExperimentSpec | None = None    # set by prepare(); its fingerprints enter
                                                     # the check records
 
@@ -102,7 +102,7 @@ class ResultsDir:
         if self.path.exists() and not self.path.is_dir():
             raise ConfigError(f"out: {self.path} is a file; expected a folder path (it is created "
                               "if missing)")
-        has_results = self.path.exists() and any(self.path.iterdir())
+        has_results = self.path.exists() and any(c.name != ".lock" for c in self.path.iterdir())
         if has_results and not (force or resume):
             raise ConfigError(f"out: {self.path} already holds results; pass --force to overwrite "
                               "it or --resume to complete an interrupted sweep")
@@ -155,24 +155,10 @@ class ResultsDir:
         return data if isinstance(data, dict) and "fingerprint" in data else None
 
     def _acquire(self) -> None:
-        try:
-            fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-        except FileExistsError:
-            pid = self.lock.read_text().strip() if self.lock.exists() else "?"
-            alive = pid.isdigit() and _pid_alive(int(pid))
-            if alive:
-                raise ConfigError(f"out: {self.path} is being written by another run (pid {pid})"
-                                  ) from None
-            self.lock.unlink(missing_ok=True)   # stale lock of a killed run
-            fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-        os.write(fd, str(os.getpid()).encode())
-        os.close(fd)
-        self._locked = True
+        self._lock.acquire()
 
     def release(self) -> None:
-        if self._locked:
-            self.lock.unlink(missing_ok=True)
-            self._locked = False
+        self._lock.release()
 
     def holds_complete(self, spec: ExperimentSpec) -> bool:
         """The folder holds this very experiment's finished results (same fingerprint, every work
@@ -332,16 +318,6 @@ def _content_problem(unit: WorkUnit, data: bytes) -> str | None:
 
 def _describe(v: dict[str, str]) -> str:
     return ", ".join(f"{k} {v[k]}" for k in sorted(v)) or "unknown versions"
-
-
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def summarize_configs(spec: ExperimentSpec, rows: list[dict[str, Any]]) -> dict[str, Any]:
