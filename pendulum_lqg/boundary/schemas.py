@@ -5,7 +5,7 @@
 (:mod:`pendulum_lqg.boundary.fields`) and the same readers (:mod:`pendulum_lqg.boundary`).
 
 Each schema returns the data it checked, with defaults filled in; an error is one line naming the
-file and the key (``a.json: suites.lecture.fingerprint: missing``).
+file and the key (``board: a.json: suites.lecture.fingerprint: missing``).
 """
 
 from __future__ import annotations
@@ -72,7 +72,7 @@ def score_file(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The score file ``path`` (``pendulum-lqg score … --out FILE``), checked for every key the
     board reads."""
     data = read_json(path, where="board")
-    where = Where(str(path))
+    where = Where(f"board: {path}")
     data = where.check(data, table)
     where.get(data, "score_version", exactly(SCORE_VERSION))
     suites = where.get(data, "suites", table)
@@ -98,7 +98,7 @@ def training_record(path: str | os.PathLike[str], *, where_text: str) -> dict[st
     from pendulum_lqg.envs.config import OBSERVATION_MODES
 
     data = read_json(path, where=where_text)
-    where = Where(str(path))
+    where = Where(f"{where_text}: {path}")
     data = where.check(data, table)
     env = where.get(data, "env", table, default={})
     where.at("env").get(env, "observation_mode", one_of(OBSERVATION_MODES), default="measurement")

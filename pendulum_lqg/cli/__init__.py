@@ -32,8 +32,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
         return _dispatch(args)
     except KeyboardInterrupt:   # Ctrl-C: one line; outputs are written only once complete
-        print("interrupted: stopped by Ctrl-C; no output file was written or changed",
-              file=sys.stderr)
+        print("interrupted: stopped by Ctrl-C before the command finished", file=sys.stderr)
         return EXIT_INTERRUPTED
 
 

@@ -38,7 +38,8 @@ def read_scores(folder: Path, *, skipped: list[str] | None = None,
         except ConfigError as exc:
             if skipped is None:
                 raise
-            skipped.append(f"skipped {path.name}: {str(exc).removeprefix('board: ')}")
+            why = str(exc).removeprefix(f"board: {path}").lstrip(": ")
+            skipped.append(f"skipped {path.name}: {why}")
     if not out:
         raise ConfigError(f"board: {folder} holds no readable score file of version "
                           f"{SCORE_VERSION} (*.json)" + (f"; {skipped[0]}" if skipped else ""))
