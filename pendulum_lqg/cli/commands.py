@@ -40,11 +40,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if recording:
         check_at_most("--episodes", args.episodes, MAX_RECORDED_EPISODES,
                       "episodes recorded with --record/--spawn, whose trajectories are kept")
-        from pendulum_lqg.files import output_file
-        from pendulum_lqg.record.writer import recording_path
-
-        output_file("--record", recording_path(args.record if args.record is not None
-                                               else DEFAULT_RECORDING), what="recording file")
+        _check_recording_target(args)
     from pendulum_lqg.watchdog import call_timeout
 
     with call_timeout(args.call_timeout):
@@ -75,6 +71,16 @@ def cmd_run(args: argparse.Namespace) -> int:
     else:
         _print_summary(policy.name, config, summary)
     return 0
+
+
+def _check_recording_target(args: argparse.Namespace) -> None:
+    """The recording's file, checked before any episode runs: not '' or a folder, and a new path
+    or a regular file (never a device or a FIFO)."""
+    from pendulum_lqg.files import output_file
+    from pendulum_lqg.record.writer import recording_path
+
+    output_file("--record", recording_path(args.record if args.record is not None
+                                           else DEFAULT_RECORDING), what="recording file")
 
 
 def _randomize(items: list[str] | None) -> dict[str, list[float]]:

@@ -18,10 +18,9 @@ import time
 from pathlib import Path
 
 import pytest
-
-from pendulum_lqg.cli import main
-from pendulum_lqg.errors import ConfigError
 from conftest import assert_one_line_error, interruptible_cli, run_cli
+
+from pendulum_lqg.errors import ConfigError
 
 LECTURE = ["--suite", "lecture", "--episodes", "1"]
 
