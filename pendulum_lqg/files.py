@@ -26,7 +26,7 @@ def output_file(where: str, path: str | os.PathLike[str] | None, *, what: str = 
     naming ``where`` (the option, e.g. ``--out``)."""
     text = "" if path is None else os.fspath(path)
     if not str(text).strip():
-        raise ConfigError(f"{where}: expected a {what} name, got {text!r}")
+        raise ConfigError(f"{where}: expected a path for the {what}, got {text!r}")
     out = Path(text)
     target = out.resolve() if out.is_symlink() else out
     try:
@@ -36,8 +36,8 @@ def output_file(where: str, path: str | os.PathLike[str] | None, *, what: str = 
     except OSError as exc:
         raise ConfigError(f"{where}: cannot inspect {out}: {exc.strerror or exc}") from None
     if mode is not None and not stat.S_ISREG(mode):
-        raise ConfigError(f"{where}: {out} is {_kind(mode)}; expected a regular {what} (or a new "
-                          "path) — it is left as it is")
+        raise ConfigError(f"{where}: {out} is {_kind(mode)}; expected a regular file or a new "
+                          f"path for the {what} (it is left as it is)")
     parent = target.parent
     try:
         parent.mkdir(parents=True, exist_ok=True)
@@ -151,6 +151,7 @@ class FileLock:
     """
 
     def __init__(self, path: Path, *, where: str) -> None:
+        """``where`` begins the refusal's line (``out: results/lecture``)."""
         self.path, self.where = Path(path), where
         self._fd: int | None = None
 
@@ -168,7 +169,7 @@ class FileLock:
             except BlockingIOError:
                 holder = os.read(fd, 32).decode(errors="replace").strip() or "?"
                 os.close(fd)
-                raise ConfigError(f"{self.where}: is being written by another run (pid {holder})"
+                raise ConfigError(f"{self.where} is being written by another run (pid {holder})"
                                   ) from None
             try:
                 same = os.path.samestat(os.fstat(fd), os.stat(self.path))
@@ -185,7 +186,7 @@ class FileLock:
         try:
             fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
         except FileExistsError:
-            raise ConfigError(f"{self.where}: is being written by another run (or a crashed "
+            raise ConfigError(f"{self.where} is being written by another run (or a crashed "
                               f"one: remove {self.path} if none runs)") from None
         os.write(fd, str(os.getpid()).encode())
         return fd

@@ -80,7 +80,7 @@ def _check_recording_target(args: argparse.Namespace) -> None:
     from pendulum_lqg.record.writer import recording_path
 
     output_file("--record", recording_path(args.record if args.record is not None
-                                           else DEFAULT_RECORDING), what="recording file")
+                                           else DEFAULT_RECORDING), what="recording")
 
 
 def _randomize(items: list[str] | None) -> dict[str, list[float]]:

@@ -76,7 +76,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     from pendulum_lqg.scoreboard.suites import load_suite, suite_names
     from pendulum_lqg.watchdog import call_timeout
 
-    out = None if args.out is None else output_file("--out", args.out, what="score file (JSON)")
+    out = None if args.out is None else output_file("--out", args.out, what="score (JSON)")
     wanted = args.suite or ["all"]
     names = suite_names() if "all" in wanted else wanted
     suites = [load_suite(n).with_episodes(args.episodes) for n in names]
@@ -123,7 +123,7 @@ def cmd_board(args: argparse.Namespace) -> int:
     from pendulum_lqg.files import atomic_write, output_file
     from pendulum_lqg.scoreboard.board import make_board
 
-    out = None if args.out is None else output_file("--out", args.out, what="board file")
+    out = None if args.out is None else output_file("--out", args.out, what="board (Markdown)")
     table = make_board(Path(args.dir), warn=lambda line: print(line, file=sys.stderr))
     if out is not None:
         atomic_write(out, table)

@@ -425,7 +425,7 @@ def test_item13_a_toml_file_nested_5000_deep_is_one_line(tmp_path, capsys, kind)
 
 # ---- 14: the results folder's lock ----------------------------------------------------------------------
 _HOLD = ("import sys, time; from pathlib import Path; from pendulum_lqg.files import FileLock; "
-         "lock = FileLock(Path(sys.argv[1]), where='out'); lock.acquire(); print('held', "
+         "lock = FileLock(Path(sys.argv[1]), where='out:'); lock.acquire(); print('held', "
          "flush=True); time.sleep(3600)")
 
 
@@ -440,11 +440,11 @@ def test_item14_the_results_lock_is_held_by_one_run_and_freed_when_it_dies(tmp_p
         for _ in range(2):           # both contenders refused, each naming the holder
             with pytest.raises(ConfigError, match=rf"^out: is being written by another run "
                                                   rf"\(pid {holder.pid}\)$"):
-                FileLock(path, where="out").acquire()
+                FileLock(path, where="out:").acquire()
     finally:
         holder.kill()
         holder.wait()
-    first, second = FileLock(path, where="out"), FileLock(path, where="out")
+    first, second = FileLock(path, where="out:"), FileLock(path, where="out:")
     first.acquire()                  # the dead holder's lock is free, without any takeover step
     with pytest.raises(ConfigError, match=rf"\(pid {os.getpid()}\)"):
         second.acquire()             # and exactly one of two later runs gets it
@@ -470,7 +470,7 @@ def test_item14_a_lock_removed_by_its_holder_between_open_and_flock_is_not_taken
             calls.append(fd)
             path.unlink()
     monkeypatch.setattr(fcntl, "flock", flock_after_the_holder_left)
-    lock = FileLock(path, where="out")
+    lock = FileLock(path, where="out:")
     lock.acquire()
     assert len(calls) == 1 and path.exists()     # it locked the new file, not the removed one
     assert os.path.samestat(os.fstat(lock._fd), os.stat(path))
