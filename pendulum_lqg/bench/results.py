@@ -36,6 +36,8 @@ from typing import TYPE_CHECKING, Any
 
 from pendulum_lqg import SCHEMA_VERSION, __version__
 from pendulum_lqg.bench.experiments import check_name
+from pendulum_lqg.boundary import read_bytes
+from pendulum_lqg.boundary.schemas import unit_record
 from pendulum_lqg.core.metrics import EPISODE_FIELDS, summarize
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.files import FileLock, atomic_write, read_csv, rows_to_csv
@@ -193,20 +195,17 @@ class ResultsDir:
     def _check_unit(self, unit: WorkUnit, spec: ExperimentSpec) -> str | None:
         """Why the files of ``unit`` cannot be trusted, or ``None`` if they can."""
         csv_file = self.units_dir / f"{unit.key}.csv"
-        try:
-            data = csv_file.read_bytes()
-            text = (self.units_dir / f"{unit.key}.json").read_text(encoding="utf-8")
-        except FileNotFoundError:
+        record_file = self.units_dir / f"{unit.key}.json"
+        if not record_file.exists():
             return "no check record (written by an older version or cut short)"
-        except (OSError, ValueError) as exc:
-            return f"unreadable ({exc.__class__.__name__})"
         try:
-            record = json.loads(text)
-        except (ValueError, RecursionError) as exc:         # RecursionError: nested too deep
-            return f"check record corrupt (not JSON: {type(exc).__name__})"
-        shape = _record_shape_problem(record)
-        if shape is not None:
-            return f"check record corrupt ({shape})"
+            data = read_bytes(csv_file, where="unit")
+        except ConfigError as exc:
+            return f"unreadable ({str(exc).removeprefix(f'unit: {csv_file}').lstrip(': ')})"
+        try:
+            record = unit_record(record_file)
+        except ConfigError as exc:
+            return f"check record corrupt ({str(exc).removeprefix(f'unit: {record_file}').lstrip(': ')})"
         actual = _unit_record(unit, spec, data)
         expected = {**actual, "rows": unit.stop - unit.start, "columns": unit_columns(unit)}
         for field in ("rows", "columns"):
@@ -272,27 +271,6 @@ def _unit_record(unit: WorkUnit, spec: ExperimentSpec, data: bytes) -> dict[str,
     if source is not None:                     # (records of built-in policies stay as they were)
         record["plugin_source"] = source
     return record
-
-
-#: The fields of a unit's check record and their JSON types (``plugin_source`` is optional).
-RECORD_FIELDS: dict[str, type | tuple[type, ...]] = {
-    "fingerprint": str, "config": int, "start": int, "stop": int, "sha256": str, "rows": int,
-    "columns": list}
-
-
-def _record_shape_problem(record: object) -> str | None:
-    """What is wrong with the shape of a parsed check record (``None``: nothing)."""
-    if not isinstance(record, dict):
-        return f"a JSON {type(record).__name__}, expected an object"
-    for key, kind in RECORD_FIELDS.items():
-        value = record.get(key)
-        if not isinstance(value, kind) or isinstance(value, bool):
-            return f"{key}: expected a {getattr(kind, '__name__', kind)}, got {type(value).__name__}"
-    if not all(isinstance(c, str) for c in record["columns"]):
-        return "columns: expected a list of names"
-    if not isinstance(record.get("plugin_source", ""), str):
-        return "plugin_source: expected a string"
-    return None
 
 
 def _content_problem(unit: WorkUnit, data: bytes) -> str | None:

@@ -142,7 +142,7 @@ def list_of(item: Validator, length: int | None = None) -> Validator:
         try:
             return [item(v) for v in value]
         except Invalid as exc:
-            raise Invalid(f"{what} of {exc.expected}") from None
+            raise Invalid(f"{what} whose items are each {exc.expected}") from None
     return check
 
 

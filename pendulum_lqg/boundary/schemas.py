@@ -1,5 +1,5 @@
-"""One schema per external JSON format: score files (``board``) and stable-baselines3 training records
-(``--agent sb3:PATH.zip``). Suite files are checked by
+"""One schema per external JSON format: score files (``board``), stable-baselines3 training records
+(``--agent sb3:PATH.zip``) and the check records of a results folder's work units. Suite files are checked by
 :func:`pendulum_lqg.scoreboard.suites.parse_suite` and experiment files by
 :func:`pendulum_lqg.bench.experiments.parse_spec`, with the same validators
 (:mod:`pendulum_lqg.boundary.fields`) and the same readers (:mod:`pendulum_lqg.boundary`).
@@ -113,5 +113,20 @@ def training_record(path: str | os.PathLike[str], *, where_text: str) -> dict[st
             "env": dict(env), "budget": data.get("budget")}
 
 
+def unit_record(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """A work unit's check record (``units/KEY.json`` of a results folder; its fields:
+    :func:`pendulum_lqg.bench.results.ResultsDir.write_unit`); errors name the file and key."""
+    data = read_json(path, where="unit")
+    where = Where(f"unit: {path}")
+    data = where.check(data, table)
+    out = {key: where.get(data, key, check) for key, check in (
+        ("fingerprint", text), ("config", integer(0)), ("start", integer(0)),
+        ("stop", integer(0)), ("sha256", text), ("rows", integer(0)),
+        ("columns", list_of(any_text)))}
+    if "plugin_source" in data:
+        out["plugin_source"] = where.get(data, "plugin_source", text)
+    return out
+
+
 __all__ = ["ALGORITHMS", "MAX_FRAME_STACK", "SCORE_VERSION", "score_file", "score_suite",
-           "training_record"]
+           "training_record", "unit_record"]
