@@ -73,12 +73,19 @@ class Watchdog:
         _active = self
         return self
 
-    def __exit__(self, *exc: object) -> None:
+    def __exit__(self, exc_type: object, exc: object, tb: object) -> None:
         global _active
         _active = None
         self._stop.set()
         self._thread.join()
         signal.signal(signal.SIGALRM, self._old_handler)       # type: ignore[arg-type]
+        main = threading.main_thread().ident
+        if isinstance(exc, CallTimeout) and any(c.thread != main for c in self._calls.values()):
+            # the stuck call runs on a worker thread (a shard of the batch), which the
+            # interpreter would wait for at exit, for ever: the line, then the end
+            sys.stderr.write(f"error: {exc}\n")
+            sys.stderr.flush()
+            os._exit(2)
 
     def message(self, call: _Call) -> str:
         return (f"{call.label}: {call.what} has not returned after {self.seconds:g} s "
