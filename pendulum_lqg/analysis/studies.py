@@ -330,7 +330,9 @@ def run_roa(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
     for cfg in spec.configurations:
         unit = out.units_dir / f"c{cfg.index:03d}.json"
         if unit.exists():
-            results.append(json.loads(unit.read_text()))
+            from pendulum_lqg.boundary import read_json
+
+            results.append(read_json(unit, where="unit"))   # regular, size and nesting bounded
             continue
         scenario, dspec = cfg.build()
         nominal, simulated = cfg.plants(scenario)
