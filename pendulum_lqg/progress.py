@@ -12,7 +12,7 @@ import sys
 import time
 from typing import Any
 
-from pendulum_lqg.limits import PROGRESS_EVERY_S
+from pendulum_lqg import limits
 
 
 class Progress:
@@ -68,7 +68,7 @@ class Progress:
                              description=self.label if description is None else description)
             return
         now = time.perf_counter()
-        if self.lines and self.done < self.total and now - self._last >= PROGRESS_EVERY_S:
+        if self.lines and self.done < self.total and now - self._last >= limits.PROGRESS_EVERY_S:
             eta = (now - self._t0) / max(self.done, 1) * (self.total - self.done)
             print(f"{self.label}: {self.done:,}/{self.total:,} {self.unit}, {now - self._t0:.0f} s, "
                   f"about {eta:.0f} s left", file=sys.stderr)
