@@ -8,6 +8,7 @@ experiment layer. Reading files at the boundary is :mod:`pendulum_lqg.boundary`'
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import os
@@ -28,16 +29,7 @@ def output_file(where: str, path: str | os.PathLike[str] | None, *, what: str = 
     if not str(text).strip():
         raise ConfigError(f"{where}: expected a path for the {what}, got {text!r}")
     out = Path(text)
-    target = out.resolve() if out.is_symlink() else out
-    try:
-        mode = os.stat(target).st_mode
-    except FileNotFoundError:
-        mode = None
-    except OSError as exc:
-        raise ConfigError(f"{where}: cannot inspect {out}: {exc.strerror or exc}") from None
-    if mode is not None and not stat.S_ISREG(mode):
-        raise ConfigError(f"{where}: {out} is {_kind(mode)}; expected a regular file or a new "
-                          f"path for the {what} (it is left as it is)")
+    target = regular_target(where, out, what=what)
     parent = target.parent
     try:
         parent.mkdir(parents=True, exist_ok=True)
@@ -49,13 +41,23 @@ def output_file(where: str, path: str | os.PathLike[str] | None, *, what: str = 
     return target
 
 
-def _kind(mode: int) -> str:
-    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
-                       (stat.S_ISSOCK, "a socket")):
-        if test(mode):
-            return name
-    return "not a regular file"
+def regular_target(where: str, path: Path, *, what: str = "file") -> Path:
+    """The file ``path`` names (a symbolic link followed), which must be absent or a regular
+    file; anything else — a device, a FIFO, a socket, a folder — is one :class:`ConfigError` line,
+    and is left as it is."""
+    from pendulum_lqg.boundary import file_kind
+
+    target = path.resolve() if path.is_symlink() else path
+    try:
+        mode = os.stat(target).st_mode
+    except FileNotFoundError:
+        return target
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot inspect {path}: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(mode):
+        raise ConfigError(f"{where}: {path} is {file_kind(mode)}; expected a regular file or a "
+                          f"new path for the {what} (it is left as it is)")
+    return target
 
 
 def atomic_write(path: Path, text: str) -> None:
@@ -66,14 +68,7 @@ def atomic_write(path: Path, text: str) -> None:
     the new name survives a crash. On any error — a full disk, a Ctrl-C — the temporary file is
     removed and ``path`` keeps its old content. A ``path`` that exists and is not a regular file
     (a device, a FIFO, a folder) is refused: only regular files are ever replaced."""
-    path = Path(path)
-    target = path.resolve() if path.is_symlink() else path
-    try:
-        mode = os.stat(target).st_mode
-    except FileNotFoundError:
-        mode = None
-    if mode is not None and not stat.S_ISREG(mode):
-        raise ConfigError(f"out: {path} is {_kind(mode)}; expected a regular file (or a new path)")
+    target = regular_target("out", Path(path))
     tmp = target.with_name(f".{target.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
     try:
@@ -95,9 +90,8 @@ def _fsync_folder(folder: Path) -> None:
     except OSError:
         return
     try:
-        os.fsync(fd)
-    except OSError:
-        pass
+        with contextlib.suppress(OSError):     # some file systems refuse fsync on a folder
+            os.fsync(fd)
     finally:
         os.close(fd)
 

@@ -33,7 +33,8 @@ _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
           (stat.S_ISSOCK, "a socket"))
 
 
-def _kind(mode: int) -> str:
+def file_kind(mode: int) -> str:
+    """What a file of ``st_mode`` ``mode`` is, for a message ("a FIFO (named pipe)")."""
     return next((name for test, name in _KINDS if test(mode)), "not a regular file")
 
 
@@ -49,7 +50,7 @@ def read_bytes(path: str | os.PathLike[str], *, where: str) -> bytes:
     except OSError as exc:
         raise ConfigError(f"{where}: cannot read {p}: {exc.strerror or exc}") from None
     if not stat.S_ISREG(mode):
-        raise ConfigError(f"{where}: {p} is {_kind(mode)}; expected a regular file")
+        raise ConfigError(f"{where}: {p} is {file_kind(mode)}; expected a regular file")
     try:
         fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     except OSError as exc:
@@ -57,7 +58,7 @@ def read_bytes(path: str | os.PathLike[str], *, where: str) -> bytes:
     try:
         st = os.fstat(fd)               # the file opened, which may have been swapped since stat
         if not stat.S_ISREG(st.st_mode):
-            raise ConfigError(f"{where}: {p} is {_kind(st.st_mode)}; expected a regular file")
+            raise ConfigError(f"{where}: {p} is {file_kind(st.st_mode)}; expected a regular file")
         _check_size(where, p, st.st_size)
         chunks, size = [], 0
         while size <= MAX_INPUT_BYTES:          # a file that grows while read stops at the ceiling
@@ -138,4 +139,4 @@ def check_nesting(data: Any, *, where: str, path: object) -> None:
             stack.extend((v, depth + 1) for v in items if isinstance(v, dict | list))
 
 
-__all__ = ["check_nesting", "read_bytes", "read_json", "read_text", "read_toml"]
+__all__ = ["check_nesting", "file_kind", "read_bytes", "read_json", "read_text", "read_toml"]
