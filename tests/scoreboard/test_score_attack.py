@@ -361,9 +361,9 @@ def test_item11_ctrl_c_during_bench_before_its_sweep_is_one_line(capsys, monkeyp
 def test_item12_an_agent_whose_act_blocks_is_stopped_naming_the_call(tmp_path, capsys):
     ref = _agent(tmp_path, _SITES["act"].format(code="time.sleep(3600)"))
     out = tmp_path / "score.json"
-    status, err = run_cli(capsys, ["score", "--agent", ref, *LECTURE, "--call-timeout", "0.5",
+    status, err = run_cli(capsys, ["score", "--agent", ref, *LECTURE, "--call-timeout", "1",
                                    "--out", str(out)])
-    assert_one_line_error(status, err, f"agent '{ref}': act has not returned after 0.5 s "
+    assert_one_line_error(status, err, f"agent '{ref}': act has not returned after 1 s "
                                        "(--call-timeout); the run is stopped")
     assert not out.exists()
 
@@ -385,8 +385,8 @@ def test_item12_a_plugin_whose_act_waits_on_a_lock_is_stopped_in_run(tmp_path, c
         """))
     ref = f"{tmp_path / 'stuck.py'}:make"
     status, err = run_cli(capsys, ["run", "--policy", ref, "--episodes", "1", "--duration", "0.1",
-                                   "--call-timeout", "0.3"])
-    assert_one_line_error(status, err, f"policy '{ref}': act has not returned after 0.3 s")
+                                   "--call-timeout", "1"])
+    assert_one_line_error(status, err, f"policy '{ref}': act has not returned after 1 s")
 
 
 def test_item12_a_call_that_cannot_be_interrupted_ends_the_process_with_the_line(tmp_path):
@@ -395,11 +395,11 @@ def test_item12_a_call_that_cannot_be_interrupted_ends_the_process_with_the_line
         code="import signal; signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM}); "
              "time.sleep(3600)"))
     proc = subprocess.run(interruptible_cli("score", "--agent", ref, *LECTURE,
-                                            "--call-timeout", "0.2"),
+                                            "--call-timeout", "1"),
                           capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.strip().splitlines() == [
-        f"error: agent '{ref}': act has not returned after 0.2 s (--call-timeout); the run is "
+        f"error: agent '{ref}': act has not returned after 1 s (--call-timeout); the run is "
         "stopped (it cannot be interrupted)"]
 
 
