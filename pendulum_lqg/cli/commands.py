@@ -41,9 +41,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         check_at_most("--episodes", args.episodes, MAX_RECORDED_EPISODES,
                       "episodes recorded with --record/--spawn, whose trajectories are kept")
         _check_recording_target(args)
-    from pendulum_lqg.watchdog import call_timeout
-
-    with call_timeout(args.call_timeout):
+    with _watchdog(args):
         res = _run_in_batches(plant, scenario, policy, args, trajectory=recording)
     summary = summarize(res.rows)
     config = {"policy": policy.name, "seed": args.seed, "episodes": args.episodes,
@@ -71,6 +69,13 @@ def cmd_run(args: argparse.Namespace) -> int:
     else:
         _print_summary(policy.name, config, summary)
     return 0
+
+
+def _watchdog(args: argparse.Namespace) -> Any:
+    """The watchdog of the plug-in's calls (``--call-timeout``)."""
+    from pendulum_lqg.watchdog import call_timeout
+
+    return call_timeout(args.call_timeout)
 
 
 def _check_recording_target(args: argparse.Namespace) -> None:
