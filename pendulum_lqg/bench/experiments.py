@@ -55,7 +55,6 @@ import itertools
 import json
 import math
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -486,6 +485,7 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
     ``model_file`` replace the file's (``bench --episodes/--seed/--model``; as
     :meth:`ExperimentSpec.with_overrides`, but the file is validated once, with them).
     """
+    from pendulum_lqg.boundary import read_toml
     from pendulum_lqg.resources import experiment_names, experiment_path
 
     path = Path(name_or_path)
@@ -498,18 +498,7 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
     if not path.is_file():
         raise ConfigError(f"experiment: no file {name_or_path!r}; known experiments: "
                           + ", ".join(experiment_names()))
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"experiment: {path} is not UTF-8 text (TOML must be): byte "
-                          f"{exc.object[exc.start]:#04x} at offset {exc.start}") from exc
-    except OSError as exc:
-        raise ConfigError(f"experiment: cannot read {path}: {exc.strerror or exc}") from exc
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"experiment: {path} is not valid TOML: "
-                          f"{' '.join(str(exc).split())}") from exc
+    data = read_toml(path, where="experiment")       # a regular file, size and nesting bounded
     try:
         return parse_spec(_overridden(data, episodes, seed, model_file), name=path.stem,
                           base_dir=path.resolve().parent)

@@ -18,7 +18,8 @@ Layout of a results folder::
     summary.md       the same as a Markdown table
     meta.json        timestamps and machine facts (kept apart so the data files are byte-identical
                      for the same seed)
-    .lock            present while a run writes into the folder
+    .lock            present while a run writes into the folder (an flock on it, which the system
+                     drops when the run ends however it ends; :class:`~pendulum_lqg.files.FileLock`)
 """
 
 from __future__ import annotations
@@ -26,7 +27,6 @@ from __future__ import annotations
 import csv
 import hashlib
 import json
-import os
 import shutil
 import time
 from collections.abc import Callable
@@ -36,9 +36,11 @@ from typing import TYPE_CHECKING, Any
 
 from pendulum_lqg import SCHEMA_VERSION, __version__
 from pendulum_lqg.bench.experiments import check_name
+from pendulum_lqg.boundary import read_bytes
+from pendulum_lqg.boundary.schemas import unit_record
 from pendulum_lqg.core.metrics import EPISODE_FIELDS, summarize
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.files import atomic_write, read_csv, rows_to_csv
+from pendulum_lqg.files import FileLock, atomic_write, read_csv, rows_to_csv
 
 if TYPE_CHECKING:
     from pendulum_lqg.bench.experiments import ExperimentSpec, WorkUnit
@@ -83,7 +85,7 @@ class ResultsDir:
         self.path = Path(path)
         self.units_dir = self.path / "units"
         self.lock = self.path / ".lock"
-        self._locked = False
+        self._lock = FileLock(self.lock, where=f"out: {self.path}")
         self._spec: ExperimentSpec | None = None    # set by prepare(); its fingerprints enter
                                                     # the check records
 
@@ -102,7 +104,7 @@ class ResultsDir:
         if self.path.exists() and not self.path.is_dir():
             raise ConfigError(f"out: {self.path} is a file; expected a folder path (it is created "
                               "if missing)")
-        has_results = self.path.exists() and any(self.path.iterdir())
+        has_results = self.path.exists() and any(c.name != ".lock" for c in self.path.iterdir())
         if has_results and not (force or resume):
             raise ConfigError(f"out: {self.path} already holds results; pass --force to overwrite "
                               "it or --resume to complete an interrupted sweep")
@@ -155,24 +157,10 @@ class ResultsDir:
         return data if isinstance(data, dict) and "fingerprint" in data else None
 
     def _acquire(self) -> None:
-        try:
-            fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-        except FileExistsError:
-            pid = self.lock.read_text().strip() if self.lock.exists() else "?"
-            alive = pid.isdigit() and _pid_alive(int(pid))
-            if alive:
-                raise ConfigError(f"out: {self.path} is being written by another run (pid {pid})"
-                                  ) from None
-            self.lock.unlink(missing_ok=True)   # stale lock of a killed run
-            fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-        os.write(fd, str(os.getpid()).encode())
-        os.close(fd)
-        self._locked = True
+        self._lock.acquire()
 
     def release(self) -> None:
-        if self._locked:
-            self.lock.unlink(missing_ok=True)
-            self._locked = False
+        self._lock.release()
 
     def holds_complete(self, spec: ExperimentSpec) -> bool:
         """The folder holds this very experiment's finished results (same fingerprint, every work
@@ -207,20 +195,17 @@ class ResultsDir:
     def _check_unit(self, unit: WorkUnit, spec: ExperimentSpec) -> str | None:
         """Why the files of ``unit`` cannot be trusted, or ``None`` if they can."""
         csv_file = self.units_dir / f"{unit.key}.csv"
-        try:
-            data = csv_file.read_bytes()
-            text = (self.units_dir / f"{unit.key}.json").read_text(encoding="utf-8")
-        except FileNotFoundError:
+        record_file = self.units_dir / f"{unit.key}.json"
+        if not record_file.exists():
             return "no check record (written by an older version or cut short)"
-        except (OSError, ValueError) as exc:
-            return f"unreadable ({exc.__class__.__name__})"
         try:
-            record = json.loads(text)
-        except (ValueError, RecursionError) as exc:         # RecursionError: nested too deep
-            return f"check record corrupt (not JSON: {type(exc).__name__})"
-        shape = _record_shape_problem(record)
-        if shape is not None:
-            return f"check record corrupt ({shape})"
+            data = read_bytes(csv_file, where="unit")
+        except ConfigError as exc:
+            return f"unreadable ({str(exc).removeprefix(f'unit: {csv_file}').lstrip(': ')})"
+        try:
+            record = unit_record(record_file)
+        except ConfigError as exc:
+            return f"check record corrupt ({str(exc).removeprefix(f'unit: {record_file}').lstrip(': ')})"
         actual = _unit_record(unit, spec, data)
         expected = {**actual, "rows": unit.stop - unit.start, "columns": unit_columns(unit)}
         for field in ("rows", "columns"):
@@ -288,27 +273,6 @@ def _unit_record(unit: WorkUnit, spec: ExperimentSpec, data: bytes) -> dict[str,
     return record
 
 
-#: The fields of a unit's check record and their JSON types (``plugin_source`` is optional).
-RECORD_FIELDS: dict[str, type | tuple[type, ...]] = {
-    "fingerprint": str, "config": int, "start": int, "stop": int, "sha256": str, "rows": int,
-    "columns": list}
-
-
-def _record_shape_problem(record: object) -> str | None:
-    """What is wrong with the shape of a parsed check record (``None``: nothing)."""
-    if not isinstance(record, dict):
-        return f"a JSON {type(record).__name__}, expected an object"
-    for key, kind in RECORD_FIELDS.items():
-        value = record.get(key)
-        if not isinstance(value, kind) or isinstance(value, bool):
-            return f"{key}: expected a {getattr(kind, '__name__', kind)}, got {type(value).__name__}"
-    if not all(isinstance(c, str) for c in record["columns"]):
-        return "columns: expected a list of names"
-    if not isinstance(record.get("plugin_source", ""), str):
-        return "plugin_source: expected a string"
-    return None
-
-
 def _content_problem(unit: WorkUnit, data: bytes) -> str | None:
     """Whether the CSV's own ``config``, ``episode`` and ``seed`` columns are ``unit``'s: a unit
     file swapped or edited with a recomputed SHA-256 in its record is caught here."""
@@ -332,16 +296,6 @@ def _content_problem(unit: WorkUnit, data: bytes) -> str | None:
 
 def _describe(v: dict[str, str]) -> str:
     return ", ".join(f"{k} {v[k]}" for k in sorted(v)) or "unknown versions"
-
-
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def summarize_configs(spec: ExperimentSpec, rows: list[dict[str, Any]]) -> dict[str, Any]:

@@ -10,6 +10,7 @@ and exits with status 2.
 
 from __future__ import annotations
 
+import argparse
 import sys
 from collections.abc import Sequence
 
@@ -18,13 +19,24 @@ from pendulum_lqg.cli.design import cmd_design
 from pendulum_lqg.cli.parser import EXIT_USAGE, build_parser
 from pendulum_lqg.cli.score import cmd_board, cmd_score
 
+#: Exit status of a run stopped by Ctrl-C (128 + SIGINT, as a shell reports it).
+EXIT_INTERRUPTED = 130
+
 COMMANDS = {"design": cmd_design, "run": cmd_run, "bench": cmd_bench, "perf": cmd_perf,
             "report": cmd_report, "score": cmd_score, "board": cmd_board}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        return _dispatch(args)
+    except KeyboardInterrupt:   # Ctrl-C: one line; outputs are written only once complete
+        print("interrupted: stopped by Ctrl-C before the command finished", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _dispatch(args: argparse.Namespace) -> int:
     from pendulum_lqg.errors import PendulumLQGError
 
     try:

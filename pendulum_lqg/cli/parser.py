@@ -11,6 +11,7 @@ from collections.abc import Callable
 from typing import Any, NoReturn
 
 from pendulum_lqg import __version__
+from pendulum_lqg.cli.score import add_call_timeout
 from pendulum_lqg.cli.score import add_parsers as add_score_parsers
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS, PLANTS
 
@@ -187,6 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "or with no viewer listening within 5 s, only the file is written")
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: configuration, summary and every episode row")
+    add_call_timeout(p)
     _add_design_options(p)
 
     p = sub.add_parser("bench", help="run an experiment grid (experiments/*.toml)",
