@@ -6,7 +6,7 @@ CONTROLLERS: tuple[str, ...] = ("lqr", "dlqr")
 #: Observers: ``none`` (true state) and the estimators of :mod:`pendulum_lqg.policy`.
 OBSERVERS: tuple[str, ...] = ("none", "luenberger", "kalman", "kalman-predictor", "kalman-tv",
                               "kalman-bucy", "reduced-order", "ackermann", "lmi", "h2", "hinf",
-                              "kalman-delay")
+                              "kalman-delay", "luenberger-euler", "kalman-bucy-euler")
 #: How the plant is simulated: MuJoCo, or the linearisation discretised exactly (ZOH) or by
 #: forward Euler at the control period (the lecture's own linear simulation).
 PLANTS: tuple[str, ...] = ("mujoco", "linear-zoh", "linear-euler")
