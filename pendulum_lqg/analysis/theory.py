@@ -39,14 +39,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.names import LECTURE_POLICIES
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
     from pendulum_lqg.plant import Plant
+    from pendulum_lqg.policy import DesignSpec
 
-#: The built-in linear policies of the lecture study (``experiments/lecture.toml``).
-LECTURE_POLICIES: tuple[str, ...] = ("dlqr+none", "dlqr+luenberger", "dlqr+kalman",
-                                     "dlqr+kalman-tv", "lqr+kalman-bucy")
 
 
 @dataclass(frozen=True)
@@ -349,9 +348,10 @@ def _check_linear_scenario(scenario: Scenario) -> None:
 
 def lecture_theory(names: Sequence[str] = LECTURE_POLICIES, *, plant: Plant | None = None,
                    scenario: Scenario | None = None, plant_kind: str = "linear-zoh",
-                   ) -> dict[str, ClosedLoopTheory]:
-    """:func:`policy_theory` of each built-in policy in ``names`` (default the lecture study's)
-    on the plant (default the shipped model) under ``scenario`` (default the lecture's)."""
+                   spec: DesignSpec | None = None) -> dict[str, ClosedLoopTheory]:
+    """:func:`policy_theory` of each built-in policy in ``names`` (default the lecture study's,
+    :data:`~pendulum_lqg.names.LECTURE_POLICIES`) on the plant (default the shipped model) under
+    ``scenario`` (default the lecture's), designed with ``spec``'s weights and poles."""
     from pendulum_lqg.core.scenario import Scenario
     from pendulum_lqg.plant import load_plant
     from pendulum_lqg.plugins import build_policy, is_plugin_ref
@@ -363,6 +363,6 @@ def lecture_theory(names: Sequence[str] = LECTURE_POLICIES, *, plant: Plant | No
         if is_plugin_ref(name):
             raise ConfigError(f"policy: {name!r} is a plugin; the theory takes built-in linear "
                               "policies 'controller+observer'")
-        policy = build_policy(name, plant=plant, scenario=scenario)
+        policy = build_policy(name, plant=plant, scenario=scenario, spec=spec)
         out[name] = policy_theory(plant, scenario, policy, plant_kind=plant_kind)
     return out

@@ -8,6 +8,7 @@ import sys
 from typing import Any
 
 from pendulum_lqg.cli.parser import DEFAULT_RECORDING, cfg_error, jsonable, noise_from_args, spec_from_args
+from pendulum_lqg.cli.theory import limit_fields
 
 
 # ---- run -----------------------------------------------------------------------------------------
@@ -30,7 +31,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                         measurement_delay=args.measurement_delay,
                         actuator_delay=args.actuator_delay, dropout=args.dropout,
                         actuator_tau=args.actuator_tau,
-                        randomize=Randomization.from_mapping(_randomize(args.randomize)))
+                        randomize=Randomization.from_mapping(_randomize(args.randomize)),
+                        **limit_fields(args))
     plugin = is_plugin_ref(name)
     spec = spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
     policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)

@@ -12,6 +12,8 @@ from typing import Any, NoReturn
 
 from pendulum_lqg import __version__
 from pendulum_lqg.cli.score import add_parsers as add_score_parsers
+from pendulum_lqg.cli.theory import add_limit_options
+from pendulum_lqg.cli.theory import add_parser as add_theory_parser
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS, PLANTS
 
 EXIT_USAGE = 2
@@ -187,6 +189,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "or with no viewer listening within 5 s, only the file is written")
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: configuration, summary and every episode row")
+    add_limit_options(p)
     _add_design_options(p)
 
     p = sub.add_parser("bench", help="run an experiment grid (experiments/*.toml)",
@@ -257,6 +260,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also measure peak memory of 1000-episode benches of 2 s and 10 s")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     add_score_parsers(sub, _positive_int)
+    add_theory_parser(sub, _add_design_options, _number)
     return parser
 
 
