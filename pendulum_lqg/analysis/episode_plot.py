@@ -12,12 +12,15 @@
 * the failure limits (±track on p, ±θ_max on θ) when they are finite, and the failure time.
 
 Only matplotlib's object API is used (:class:`matplotlib.figure.Figure`, no ``pyplot``): the
-function changes no backend and no style, so it is safe inside a library, a script or Jupyter
-(a returned figure shows inline there). matplotlib is imported when a figure is made.
+function changes no backend and no style, so it is safe inside a library, a script or Jupyter.
+The figure shows inline in Jupyter as a cell's value even where ``pyplot`` was never imported (it
+renders itself as PNG, ``_repr_png_``). matplotlib is imported when a figure is made.
 """
 
 from __future__ import annotations
 
+import functools
+import io
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -74,7 +77,6 @@ def plot_episode(trajectory: Trajectory, *, plant: Plant | None = None,
         ``fig.savefig(path)``; in Jupyter it shows inline as the cell's value.
     """
     import matplotlib
-    from matplotlib.figure import Figure
 
     t = np.asarray(trajectory.t, dtype=float)
     x = np.asarray(trajectory.x, dtype=float)
@@ -87,7 +89,7 @@ def plot_episode(trajectory: Trajectory, *, plant: Plant | None = None,
     ncol = 2
     nrow = -(-(n + 2) // ncol)
     with matplotlib.rc_context(_STYLE):
-        fig = Figure(figsize=(11.0, 2.3 * nrow + 0.6), layout="constrained")
+        fig = _inline_figure_class()(figsize=(11.0, 2.3 * nrow + 0.6), layout="constrained")
         grid = fig.subplots(nrow, ncol, sharex=True, squeeze=False)
         axes = list(grid.flat)
         for i in range(n):
@@ -106,6 +108,21 @@ def plot_episode(trajectory: Trajectory, *, plant: Plant | None = None,
         fig.suptitle(title if title is not None else episode_title(trajectory))
         axes[0].legend(loc="upper right")
     return fig
+
+
+@functools.cache
+def _inline_figure_class() -> type[Figure]:
+    """:class:`~matplotlib.figure.Figure` that Jupyter can show without ``pyplot``: IPython shows a
+    plain ``Figure`` as PNG only after ``pyplot`` registered its formatter, else as text."""
+    from matplotlib.figure import Figure
+
+    class InlineFigure(Figure):
+        def _repr_png_(self) -> bytes:
+            buf = io.BytesIO()
+            self.savefig(buf, format="png", dpi=100)
+            return buf.getvalue()
+
+    return InlineFigure
 
 
 def save_episode_plot(fig: Figure, path: str | Path) -> Path:

@@ -103,6 +103,12 @@ def test_the_policy_force_before_saturation_is_kept_and_drawn(plant):
     assert len(labels) == 3 and labels[0] == "x (true)" and "failure limit" in labels
 
 
+def test_the_figure_renders_itself_for_jupyter_without_pyplot(plant):
+    tr, sc = _episode(plant, "dlqr+kalman")
+    png = plot_episode(tr, plant=plant, scenario=sc)._repr_png_()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
+
+
 def test_plotting_leaves_the_callers_matplotlib_state_alone(plant):
     tr, sc = _episode(plant, "dlqr+kalman")
     before = (matplotlib.get_backend(), dict(matplotlib.rcParams))
