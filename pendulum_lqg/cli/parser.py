@@ -236,6 +236,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also stream the recording to a native Rerun viewer; the file is written "
                         f"all the same (--record, default {DEFAULT_RECORDING}); without a display, "
                         "or with no viewer listening within 5 s, only the file is written")
+    g = p.add_argument_group("picture of an episode")
+    g.add_argument("--plot", metavar="FILE", default=None,
+                   help="draw one episode to FILE (.png, .svg or .pdf): p, θ, ṗ, θ̇ with the "
+                        "estimate ± 2σ, the measurement y and the force u with its saturation "
+                        "(default: none)")
+    g.add_argument("--plot-episode", type=_nonneg_int, default=0, metavar="K",
+                   help="the episode --plot draws, 0 … --episodes − 1 (default 0, the first)")
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: configuration, summary and every episode row")
     add_limit_options(p)
