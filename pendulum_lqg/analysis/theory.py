@@ -211,14 +211,13 @@ class ClosedLoopTheory:
         for key, i, what in checks[:len(self.state_names)]:
             name, unit = self.state_names[i], self.units[i]
             s, lim = self.std[name], self.limits.get(key, float("inf"))
-            label = "θ" if name == "theta" else name
+            label, u = ("θ" if name == "theta" else name), (f" {unit}" if unit else "")
             if not np.isfinite(lim):
-                parts.append(f"std {label} = {s:.2g} {unit} (no limit)")
+                parts.append(f"std {label} = {s:.2g}{u} (no limit)")
             elif s > lim:
-                beyond.append(f"stationary std {label} = {s:.2g} {unit} exceeds {what} "
-                              f"±{lim:g} {unit}")
+                beyond.append(f"stationary std {label} = {s:.2g}{u} exceeds {what} ±{lim:g}{u}")
             else:
-                parts.append(f"std {label} = {s:.2g} {unit} ({what} ±{lim:g} {unit} is "
+                parts.append(f"std {label} = {s:.2g}{u} ({what} ±{lim:g}{u} is "
                              f"{lim / s:.1f} σ away)" if s > 0 else f"std {label} = 0")
         return "stable; " + "; ".join(beyond + parts)
 

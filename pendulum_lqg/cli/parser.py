@@ -155,6 +155,11 @@ def add_theory_parser(sub: Any) -> None:
     p.add_argument("--plant", choices=("linear-zoh", "linear-euler"), default="linear-zoh",
                    help="the linear plant: exact ZOH of the linearisation, or the lecture's "
                         "forward Euler at the control period (default linear-zoh)")
+    p.add_argument("--lti", default=None, metavar="FILE",
+                   help="a plant given as matrices (TOML or .npz, e.g. "
+                        "experiments/double_integrator.lti.toml) instead of the cart-pole; "
+                        "policies dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
+                        "dlqr+none, dlqr+kalman, dlqr+luenberger)")
     p.add_argument("--noise-scale", type=_number, default=1.0,
                    help="multiplies both noises' standard deviations (default 1)")
     p.add_argument("--duration", type=_number, default=10.0,
