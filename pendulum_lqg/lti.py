@@ -2,7 +2,7 @@ r"""Any linear plant given as matrices: ``ẋ = A x + B u + G w``, ``y = C x + v
 
 A separate, explicit kind of plant beside the MuJoCo cart-pole (whose MJCF model stays the one
 source of truth of the cart-pole): the documents' double integrator, Franklin's third-order plant
-and Ogata's discrete example are files in ``experiments/`` (``*.lti.toml``), read by
+and Ogata's discrete example are files in ``experiments/lti/``, read by
 :func:`load_lti` from TOML or ``.npz``. An :class:`LTIPlant` carries its own noise (the density W
 of w, the per-sample covariance V of v), cost weights and force limit; :func:`design_lti_policy`
 designs the built-in controllers and observers on it, returning the same runtime

@@ -13,13 +13,13 @@ from pendulum_lqg.cli import main
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.lti import design_lti_policy, load_lti, lti_from_mapping, lti_theory
 
-EXPERIMENTS = Path(__file__).resolve().parents[1] / "experiments"
+EXPERIMENTS = Path(__file__).resolve().parents[1] / "experiments" / "lti"
 
 
 def test_double_integrator_designs_tend_to_the_continuous_ones():
     """At T = 0.01 s the sampled LQ gain is close to K = [1, √2] and the filter gain to L·T with
     the Kalman–Bucy L = [√3, 1]ᵀ (theory §5.2); the continuous lqr gain is exact."""
-    di = load_lti(EXPERIMENTS / "double_integrator.lti.toml")
+    di = load_lti(EXPERIMENTS / "double_integrator.toml")
     assert di.n_states == 2 and di.state_names == ("position", "velocity")
     np.testing.assert_allclose(design_lti_policy(di, "lqr+none").K, [[1, math.sqrt(2)]],
                                atol=1e-9)
@@ -30,11 +30,11 @@ def test_double_integrator_designs_tend_to_the_continuous_ones():
 
 
 def test_ogata_and_franklin_files_reproduce_the_documents():
-    ogata = load_lti(EXPERIMENTS / "ogata_discrete.lti.toml")
+    ogata = load_lti(EXPERIMENTS / "ogata_discrete.toml")
     assert ogata.discrete
     np.testing.assert_allclose(design_lti_policy(ogata, "dlqr+none").K, [[1.0, 0.7913]],
                                atol=5e-5)
-    franklin = load_lti(EXPERIMENTS / "franklin_third_order.lti.toml")
+    franklin = load_lti(EXPERIMENTS / "franklin_third_order.toml")
     poles = design_lti_policy(franklin, "dlqr+luenberger").info["observer_poles"]
     expected = np.exp(np.array([-21, -22 + 2j, -22 - 2j]) * 0.02)
     assert np.sort_complex(poles) == pytest.approx(np.sort_complex(expected), abs=1e-9)
@@ -58,7 +58,7 @@ def test_lti_theory_scalar_closed_form():
 def test_theory_cli_on_the_double_integrator(capsys):
     import json
 
-    assert main(["theory", "--lti", str(EXPERIMENTS / "double_integrator.lti.toml"), "--json"]) == 0
+    assert main(["theory", "--lti", str(EXPERIMENTS / "double_integrator.toml"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert set(out["policies"]) == {"dlqr+none", "dlqr+kalman", "dlqr+luenberger"}
     assert all(p["stable"] for p in out["policies"].values())
@@ -79,7 +79,7 @@ def test_bad_lti_tables_name_the_key(table, message):
 
 
 def test_npz_and_toml_give_the_same_plant(tmp_path):
-    di = load_lti(EXPERIMENTS / "double_integrator.lti.toml")
+    di = load_lti(EXPERIMENTS / "double_integrator.toml")
     path = tmp_path / "di.npz"
     np.savez(path, control_period=0.01, A=di.A, B=di.B, C=di.C, W=np.diag(di.W), V=np.diag(di.V),
              Q=di.Q, R=1.0)

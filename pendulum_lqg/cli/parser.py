@@ -157,7 +157,7 @@ def add_theory_parser(sub: Any) -> None:
                         "forward Euler at the control period (default linear-zoh)")
     p.add_argument("--lti", default=None, metavar="FILE",
                    help="a plant given as matrices (TOML or .npz, e.g. "
-                        "experiments/double_integrator.lti.toml) instead of the cart-pole; "
+                        "experiments/lti/double_integrator.toml) instead of the cart-pole; "
                         "policies dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
                         "dlqr+none, dlqr+kalman, dlqr+luenberger)")
     p.add_argument("--noise-scale", type=_number, default=1.0,
