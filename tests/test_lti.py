@@ -27,6 +27,11 @@ def test_double_integrator_designs_tend_to_the_continuous_ones():
                                rtol=1e-2)
     L = design_lti_policy(di, "dlqr+kalman").info["L"]
     np.testing.assert_allclose(L.ravel(), [math.sqrt(3) * 0.01, 0.01], rtol=2e-2)
+    # the stationary estimation error of the sampled filter tends to the Kalman–Bucy
+    # Σ = [[√3, 1], [1, √3]]: both stds √√3
+    err = lti_theory(di, ("dlqr+kalman",))["dlqr+kalman"].estimate_error_std
+    assert err["position"] == pytest.approx(3 ** 0.25, rel=1e-2)
+    assert err["velocity"] == pytest.approx(3 ** 0.25, rel=1e-2)
 
 
 def test_ogata_and_franklin_files_reproduce_the_documents():
