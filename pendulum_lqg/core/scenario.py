@@ -157,5 +157,8 @@ class Scenario:
         d = dataclasses.asdict(self)
         d["overrides"] = {k: v for k, v in d["overrides"].items() if v is not None}
         d["randomize"] = {k: list(v) for k, v in d["randomize"].items() if v is not None}
+        for name in ("theta_max", "track_limit", "force_limit"):   # a switched-off limit: "inf"
+            if d[name] == float("inf"):                              # (JSON has no ∞; null is
+                d[name] = "inf"                                      # "the model's" limit)
         return d
 

@@ -26,6 +26,11 @@ def test_limits_default_to_the_model_and_accept_inf(plant):
     sc = Scenario(plant="linear-zoh", theta_max=INF, track_limit="inf", force_limit=INF)
     assert rules.limits(plant, sc) == (INF, INF, INF)
     assert rules.limits(plant, Scenario(track_limit=1.0, force_limit=5))[1:] == (1.0, 5.0)
+    d = sc.to_dict()                     # JSON has no ∞ and null means "the model's": "inf"
+    assert (d["theta_max"], d["track_limit"], d["force_limit"]) == ("inf", "inf", "inf")
+    assert Scenario(**{k: d[k] for k in ("plant", "theta_max", "track_limit")}) == \
+        sc.replace(force_limit=None)
+    assert Scenario().to_dict()["track_limit"] is None
 
 
 @pytest.mark.parametrize("field, value", [("theta_max", 0), ("theta_max", -INF),
