@@ -67,7 +67,8 @@ nitpicky = False
 
 html_theme = "furo"
 html_title = f"pendulum_lqg {release}"
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["custom.css"]        # 1 280 px wide pages: nothing cut off (see the file)
 
 
 # ---- the package's docstrings, read as numpydoc ---------------------------------------------------
