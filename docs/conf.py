@@ -29,6 +29,8 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    # MathJax 3 from the built site (_static/mathjax), not from a CDN: the maths renders offline
+    "sphinx-mathjax-offline",
     "sphinx.ext.viewcode",
 ]
 source_suffix = {".md": "myst-nb"}     # a page is a notebook when its front matter says so
@@ -65,7 +67,8 @@ nitpicky = False
 
 html_theme = "furo"
 html_title = f"pendulum_lqg {release}"
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["custom.css"]        # 1 280 px wide pages: nothing cut off (see the file)
 
 
 # ---- the package's docstrings, read as numpydoc ---------------------------------------------------
