@@ -3,6 +3,9 @@
 Build, with warnings as errors:
 
     uv run --group docs sphinx-build -W -b html docs docs/_build/html
+
+The pages are MyST Markdown read by MyST-NB; the tutorials (``docs/tutorials/*.md``, MyST
+notebooks kept as text) are executed on every build, and a failing cell fails the build.
 """
 
 from __future__ import annotations
@@ -22,13 +25,15 @@ release = pendulum_lqg.__version__
 version = ".".join(release.split(".")[:2])
 
 extensions = [
-    "myst_parser",
+    "myst_nb",                 # MyST Markdown (myst-parser) and executable MyST notebooks
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    # MathJax 3 from the built site (_static/mathjax), not from a CDN: the maths renders offline
+    "sphinx-mathjax-offline",
     "sphinx.ext.viewcode",
 ]
-source_suffix = {".md": "markdown"}
+source_suffix = {".md": "myst-nb"}     # a page is a notebook when its front matter says so
 root_doc = "index"
 # leaderboard/: the score files and the generated board, included by leaderboard.md
 exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "leaderboard"]
@@ -38,6 +43,15 @@ exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "leaderboard"]
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 myst_dmath_double_inline = True
+
+# MyST-NB: execute every notebook on every build (never a stale cached output), in its own folder;
+# an exception in a cell fails the build, and so does a cell that runs longer than the timeout
+# (each tutorial is meant to run in well under a minute on two cores).
+nb_execution_mode = "force"
+nb_execution_timeout = 180
+nb_execution_raise_on_error = True
+nb_execution_show_tb = True
+nb_merge_streams = True
 
 # autodoc / napoleon: the package's docstrings are numpydoc.
 napoleon_google_docstring = False
@@ -53,7 +67,8 @@ nitpicky = False
 
 html_theme = "furo"
 html_title = f"pendulum_lqg {release}"
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["custom.css"]        # 1 280 px wide pages: nothing cut off (see the file)
 
 
 # ---- the package's docstrings, read as numpydoc ---------------------------------------------------

@@ -510,8 +510,10 @@ def build_policy(name: str | None, *, plant: Plant, scenario: Scenario,
     if name is not None:
         controller, observer = split_builtin(name)
         spec = dataclasses.replace(spec, controller=controller, observer=observer)
+    from pendulum_lqg.core.rules import limits
+
     return design_policy(plant, scenario.control_period, scenario.noise, spec,
-                         delays=delay_periods(scenario))
+                         delays=delay_periods(scenario), u_max=limits(plant, scenario)[2])
 
 
 def split_builtin(name: str) -> tuple[str, str]:

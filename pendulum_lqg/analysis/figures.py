@@ -7,7 +7,16 @@ from typing import Any
 
 import numpy as np
 
-from pendulum_lqg.analysis.reading import NUMBER, field, numbers, read_json, read_rows, records, save
+from pendulum_lqg.analysis.reading import (
+    NUMBER,
+    Figures,
+    field,
+    numbers,
+    read_json,
+    read_rows,
+    records,
+    save,
+)
 from pendulum_lqg.core.metrics import mean_se, wilson_interval
 from pendulum_lqg.errors import ConfigError
 
@@ -85,7 +94,7 @@ def _legend_outside(fig: Any, ax: Any) -> None:
         fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5), frameon=False)
 
 
-def grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: Any,
+def grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], mk: Figures,
                   ) -> list[tuple[str, str]]:
     rows = read_rows(folder)
     grid = src.get("grid", {})
@@ -94,18 +103,18 @@ def grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: A
     series = [k for k in SERIES_KEYS if k in varying] or ["config"]
     figs: list[tuple[str, str]] = []
     if {"pole_mass_scale", "pole_length_scale"} <= set(sweeps):
-        return _mismatch_figures(rows, out, name, series, plt)
+        return _mismatch_figures(rows, out, name, series, mk)
     if "delay" in grid and "delay_kind" in grid:
-        return _delay_figures(rows, out, name, series, plt)
+        return _delay_figures(rows, out, name, series, mk)
     if not sweeps:
-        figs.append(("cost distributions", _cost_boxes(rows, out, name, series, None, plt)))
+        figs.append(("cost distributions", _cost_boxes(rows, out, name, series, None, mk)))
         return figs
     x = max(sweeps, key=lambda k: len(grid[k]))
     facets = [k for k in sweeps if k != x]
     facet_vals = sorted({tuple(r[k] for k in facets) for r in rows})
     ncol = min(len(facet_vals), 2)
     nrow = -(-len(facet_vals) // ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.2 * nrow), squeeze=False,
+    fig, axes = mk.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.2 * nrow), squeeze=False,
                              sharey=True)
     markers = ["o", "s", "^", "D", "v", "P", "X", "*"]
     for ax, fv in zip(axes.flat, facet_vals, strict=False):
@@ -128,10 +137,10 @@ def grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: A
         row[0].set_ylabel("success rate\n(95 % Wilson band)")
     _legend_outside(fig, axes.flat[0])
     fig.suptitle(f"{name}: success rate vs {x}")
-    figs.append((f"success rate vs {x}", save(fig, out, f"{name}_success_vs_{x}.png", plt)))
+    figs.append((f"success rate vs {x}", save(fig, out, f"{name}_success_vs_{x}.png")))
 
     if x == "control_period":
-        fig, axes = plt.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.2 * nrow), squeeze=False)
+        fig, axes = mk.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.2 * nrow), squeeze=False)
         for ax, fv in zip(axes.flat, facet_vals, strict=False):
             sub = [r for r in rows if tuple(r[k] for k in facets) == fv]
             for i, (key, grp) in enumerate(sorted(_group(sub, series).items())):
@@ -147,12 +156,12 @@ def grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: A
             row[0].set_ylabel("mean cost J\n(successful episodes)")
         _legend_outside(fig, axes.flat[0])
         fig.suptitle(f"{name}: cost vs control period")
-        figs.append(("cost vs control period", save(fig, out, f"{name}_cost_vs_T.png", plt)))
+        figs.append(("cost vs control period", save(fig, out, f"{name}_cost_vs_T.png")))
 
     has_est = any(np.isfinite(float(r["rms_est_err_theta"])) and float(r["rms_est_err_theta"]) > 0
                   for r in rows)
     if has_est and x == "noise_scale":
-        fig, axes = plt.subplots(2, 2, figsize=(12, 8))
+        fig, axes = mk.subplots(2, 2, figsize=(12, 8))
         for ax, (metric, label) in zip(axes.flat, EST_STATES, strict=True):
             for key, grp in sorted(_group(rows, series).items()):
                 xs, m, se = _metric_curve(grp, x, metric, successes_only=False)
@@ -167,10 +176,10 @@ def grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], plt: A
         _legend_outside(fig, axes.flat[0])
         fig.suptitle(f"{name}: estimation error per state (all episodes, mean ± SE)")
         figs.append(("estimation error per state",
-                     save(fig, out, f"{name}_estimation_error.png", plt)))
+                     save(fig, out, f"{name}_estimation_error.png")))
     nominal = 1.0 if x == "noise_scale" else None
     figs.append(("cost distributions", _cost_boxes(rows, out, name, series + facets,
-                                                   (x, nominal), plt)))
+                                                   (x, nominal), mk)))
     return figs
 
 
@@ -200,10 +209,10 @@ def tolerated_delays(rows: list[dict[str, Any]], series: list[str], *,
 
 
 def _delay_figures(rows: list[dict[str, Any]], out: Path, name: str, series: list[str],
-                   plt: Any) -> list[tuple[str, str]]:
+                   mk: Figures) -> list[tuple[str, str]]:
     """Success (Wilson bands) and mean J vs delay, a column per kind of delay."""
     kinds = sorted({str(r["delay_kind"]) for r in rows}, reverse=True)   # measurement first
-    fig, axes = plt.subplots(2, len(kinds), figsize=(5.4 * len(kinds), 6.6), squeeze=False,
+    fig, axes = mk.subplots(2, len(kinds), figsize=(5.4 * len(kinds), 6.6), squeeze=False,
                              sharex=True)
     for col, kind in enumerate(kinds):
         sub = [r for r in rows if r["delay_kind"] == kind]
@@ -224,8 +233,8 @@ def _delay_figures(rows: list[dict[str, Any]], out: Path, name: str, series: lis
     axes[1][0].set_ylabel("mean J of successful episodes (± SE)")
     axes[0][-1].legend(loc="lower left")
     fig.suptitle(f"{name}: success and cost vs delay (dotted: {TOLERANCE_LEVEL:.0%})")
-    figs = [("success and cost vs delay", save(fig, out, f"{name}_success_vs_delay.png", plt))]
-    figs.append(("cost distributions", _cost_boxes(rows, out, name, series, ("delay", 0.0), plt)))
+    figs = [("success and cost vs delay", save(fig, out, f"{name}_success_vs_delay.png"))]
+    figs.append(("cost distributions", _cost_boxes(rows, out, name, series, ("delay", 0.0), mk)))
     return figs
 
 
@@ -249,7 +258,7 @@ def delay_table(rows: list[dict[str, Any]], series: list[str]) -> list[str]:
 
 
 def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[str],
-                at: tuple[str, float | None] | None, plt: Any) -> str:
+                at: tuple[str, float | None] | None, mk: Figures) -> str:
     """Box plots of the cost of successful episodes per series (per x value when there are few)."""
     groups = _group(rows, series)
     if at is not None:
@@ -261,7 +270,7 @@ def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[s
             xs = [xv]
     else:
         xk, xs = "", [None]  # type: ignore[list-item]   # one panel, no grid value
-    fig, axes = plt.subplots(1, len(xs), figsize=(2.0 + 4.2 * len(xs), 1.2 + 0.36 * len(groups)),
+    fig, axes = mk.subplots(1, len(xs), figsize=(2.0 + 4.2 * len(xs), 1.2 + 0.36 * len(groups)),
                              squeeze=False, sharey=True)
     from matplotlib import ticker
 
@@ -284,12 +293,12 @@ def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[s
         if xv is not None:
             ax.set_title(f"{LABELS.get(xk, xk)} = {xv:g}")
     fig.suptitle(f"{name}: cost distributions")
-    return save(fig, out, f"{name}_cost_distribution.png", plt)
+    return save(fig, out, f"{name}_cost_distribution.png")
 
 
 def _mismatch_figures(rows: list[dict[str, Any]], out: Path, name: str, series: list[str],
-                      plt: Any) -> list[tuple[str, str]]:
-    fig, axes = plt.subplots(2, 2, figsize=(10, 7))
+                      mk: Figures) -> list[tuple[str, str]]:
+    fig, axes = mk.subplots(2, 2, figsize=(10, 7))
     for col, (x, other) in enumerate((("pole_mass_scale", "pole_length_scale"),
                                       ("pole_length_scale", "pole_mass_scale"))):
         sub = [r for r in rows if float(r[other]) == 1.0]
@@ -310,14 +319,14 @@ def _mismatch_figures(rows: list[dict[str, Any]], out: Path, name: str, series: 
     axes[1][0].set_ylabel("mean cost J (successful episodes)")
     axes[0][1].legend(loc="best")
     fig.suptitle(f"{name}: the simulated pole differs from the design model")
-    figs = [("mismatch curves", save(fig, out, f"{name}_curves.png", plt))]
+    figs = [("mismatch curves", save(fig, out, f"{name}_curves.png"))]
 
     groups = sorted(_group(rows, series).items())
     ms = sorted({float(r["pole_mass_scale"]) for r in rows})
     ls = sorted({float(r["pole_length_scale"]) for r in rows})
     ncol = min(len(groups), 2)
     nrow = -(-len(groups) // ncol)
-    fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.4 * nrow), squeeze=False)
+    fig, axes = mk.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.4 * nrow), squeeze=False)
     for ax, (key, grp) in zip(axes.flat, groups, strict=False):
         Z = np.full((len(ls), len(ms)), np.nan)
         for (m, ln), cell in _group(grp, ["pole_mass_scale", "pole_length_scale"]).items():
@@ -338,13 +347,12 @@ def _mismatch_figures(rows: list[dict[str, Any]], out: Path, name: str, series: 
     fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label="success rate")
     fig.suptitle(f"{name}: success over pole mass × length")
     fig.savefig(out / f"{name}_success_grid.png", bbox_inches="tight")
-    plt.close(fig)
     figs.append(("success over pole mass × length", f"{name}_success_grid.png"))
     return figs
 
 
 # ---- margins -------------------------------------------------------------------------------------
-def margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[str, str]]:
+def margins_figures(folder: Path, out: Path, name: str, mk: Figures) -> list[tuple[str, str]]:
     from pendulum_lqg.bench.results import read_csv
 
     nyq = read_csv(folder / "nyquist.csv")
@@ -352,7 +360,7 @@ def margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[
     for r in nyq:
         curves.setdefault(str(r["loop"]), []).append((float(r["re"]), float(r["im"])))  # type: ignore[arg-type]
     t = np.linspace(0, 2 * np.pi, 400)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 5))
+    fig, axes = mk.subplots(1, 2, figsize=(11, 5))
     cont = [k for k in curves if "continuous" in k or k.startswith("LTR")]
     disc = [k for k in curves if k not in cont]
     for ax, keys, title in ((axes[0], cont, "continuous loops (LTR: W = q²BBᵀ)"),
@@ -372,10 +380,10 @@ def margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[
         ax.set_title(title)
         ax.legend(loc="lower left", fontsize=7)
     fig.suptitle(f"{name}: Nyquist plots at the plant input (ω > 0 bold, mirror thin)")
-    figs = [("Nyquist: LQ vs LQG", save(fig, out, f"{name}_nyquist.png", plt))]
+    figs = [("Nyquist: LQ vs LQG", save(fig, out, f"{name}_nyquist.png"))]
 
     ltr = read_csv(folder / "ltr.csv")
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
+    fig, axes = mk.subplots(1, 3, figsize=(13, 3.6))
     for meas in sorted({str(r["measurement"]) for r in ltr}):
         sub = [r for r in ltr if r["measurement"] == meas]
         q = np.array([float(r["q"]) for r in sub])  # type: ignore[arg-type]
@@ -400,7 +408,7 @@ def margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[
     axes[1].set_yscale("log")
     axes[0].legend(loc="best")
     fig.suptitle(f"{name}: loop transfer recovery")
-    figs.append(("loop transfer recovery", save(fig, out, f"{name}_ltr.png", plt)))
+    figs.append(("loop transfer recovery", save(fig, out, f"{name}_ltr.png")))
 
     loops: list[dict[str, Any]] = [r for r in loops_all if float(r["control_period"]) > 0]
     for i, r in enumerate(loops):
@@ -408,7 +416,7 @@ def margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[
         field(r, "closed_loop_stable", bool, summ_path, where=f"loops[{i}].")
         field(r, "discretization", str, summ_path, default="", where=f"loops[{i}].")
     if loops:
-        fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
+        fig, axes = mk.subplots(1, 2, figsize=(10, 3.6))
 
         def keyf(r: dict[str, Any]) -> tuple[str, str]:
             return str(r["policy"]), str(r.get("discretization", ""))
@@ -426,12 +434,12 @@ def margins_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[
             ax.set_title(title)
         axes[1].legend(loc="best", fontsize=7)
         fig.suptitle(f"{name}: margins of the sampled loops")
-        figs.append(("sampled-loop margins vs T", save(fig, out, f"{name}_sampled.png", plt)))
+        figs.append(("sampled-loop margins vs T", save(fig, out, f"{name}_sampled.png")))
     return figs
 
 
 # ---- region of attraction ------------------------------------------------------------------------
-def roa_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[str, str]]:
+def roa_figures(folder: Path, out: Path, name: str, mk: Figures) -> list[tuple[str, str]]:
     summ_path = folder / "summary.json"
     summ = read_json(summ_path)
     prm = field(summ, "params", dict, summ_path)
@@ -445,7 +453,7 @@ def roa_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[str,
     est = list(dict.fromkeys(c["estimate0"] for c in cfgs))
     t_lo, t_hi, _ = prm["map_theta"]
     d_lo, d_hi, _ = prm["map_theta_dot"]
-    fig, axes = plt.subplots(len(est), len(policies), figsize=(3.0 * len(policies),
+    fig, axes = mk.subplots(len(est), len(policies), figsize=(3.0 * len(policies),
                                                               2.8 * len(est)), squeeze=False)
     from pendulum_lqg.bench.results import read_csv
 
@@ -474,9 +482,9 @@ def roa_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[str,
         ax.set_ylabel("θ̇₀ [rad/s]")
     fig.suptitle(f"{name}: noise-free recovery (green recovered, yellow survived unsettled, red "
                  f"failed); dashed: noisy θ* at ≥ {prm['level']:.0%}")
-    figs = [("region of attraction maps", save(fig, out, f"{name}_maps.png", plt))]
+    figs = [("region of attraction maps", save(fig, out, f"{name}_maps.png"))]
 
-    fig, ax = plt.subplots(figsize=(6.5, 3.4))
+    fig, ax = mk.subplots(figsize=(6.5, 3.4))
     width = 0.8 / max(1, len(est))
     for j, e in enumerate(est):
         vals = [next((float(c["theta_star"]) for c in cfgs
@@ -488,5 +496,5 @@ def roa_figures(folder: Path, out: Path, name: str, plt: Any) -> list[tuple[str,
     ax.legend()
     ax.set_title(f"{name}: largest θ₀ with ≥ {prm['level']:.0%} of "
                  f"{summ['episodes_per_batch']} noisy episodes surviving")
-    figs.append(("largest recoverable angle", save(fig, out, f"{name}_theta_star.png", plt)))
+    figs.append(("largest recoverable angle", save(fig, out, f"{name}_theta_star.png")))
     return figs

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pendulum_lqg.errors import ConfigError
+
+if TYPE_CHECKING:
+    from matplotlib.typing import RcKeyType
 
 MISSING = object()
 
@@ -72,24 +75,30 @@ def numbers(data: dict[str, Any], key: str, path: Path, n: int, where: str) -> l
     return [float(v) for v in vals]
 
 
-def load_pyplot() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    # readable at a documentation page's width: ~1000–1600 px wide PNGs, 11 pt text
-    plt.rcParams.update({"figure.dpi": 110, "savefig.dpi": 110, "font.size": 11,
-                         "axes.titlesize": 11, "axes.labelsize": 11, "xtick.labelsize": 10,
-                         "ytick.labelsize": 10, "axes.grid": True, "grid.alpha": 0.3,
-                         "legend.fontsize": 9, "lines.linewidth": 1.6})
-    return plt
+#: The report's style, readable at a documentation page's width (~1000–1600 px wide PNGs, 11 pt
+#: text); applied with ``matplotlib.rc_context`` while a report is drawn, never globally.
+REPORT_STYLE: dict[RcKeyType, Any] = {
+    "figure.dpi": 110, "savefig.dpi": 110, "font.size": 11, "axes.titlesize": 11, "axes.labelsize": 11,
+    "xtick.labelsize": 10, "ytick.labelsize": 10, "axes.grid": True, "grid.alpha": 0.3,
+    "legend.fontsize": 9, "lines.linewidth": 1.6}
 
 
-def save(fig: Any, out: Path, fname: str, plt: Any) -> str:
+class Figures:
+    """Makes the report's figures with matplotlib's object API (:class:`matplotlib.figure.Figure`,
+    no ``pyplot``): a report changes no backend and keeps no figure alive after it is saved."""
+
+    def subplots(self, nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float],
+                 **kwargs: Any) -> tuple[Any, Any]:
+        """A new figure and its axes, as ``Figure(figsize=…).subplots(nrows, ncols, **kwargs)``."""
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=figsize)
+        return fig, fig.subplots(nrows, ncols, **kwargs)
+
+
+def save(fig: Any, out: Path, fname: str) -> str:
     fig.tight_layout()
     fig.savefig(out / fname, bbox_inches="tight")
-    plt.close(fig)
     return fname
 
 

@@ -82,7 +82,8 @@ GRID_KEYS = ("policy", "controller", "observer", "noise_scale", "control_period"
 SENSING_KEYS = ("measurement_delay", "actuator_delay", "dropout", "actuator_tau")
 DELAY_KINDS = ("measurement", "actuator")
 SCENARIO_KEYS = ("control_period", "duration", "x0", "x0_std", "estimate0", "theta_max",
-                 "settle_band", "cost_Q", "cost_R", *SENSING_KEYS, "randomize", "plant")
+                 "track_limit", "force_limit", "settle_band", "cost_Q", "cost_R", *SENSING_KEYS,
+                 "randomize", "plant")
 NOISE_KEYS = tuple(f.name for f in dataclasses.fields(NoiseModel))
 DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
 MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))

@@ -39,11 +39,11 @@ from pendulum_lqg.bench.experiments import check_name
 from pendulum_lqg.boundary import read_bytes
 from pendulum_lqg.boundary.schemas import unit_record
 from pendulum_lqg.core.metrics import EPISODE_FIELDS, summarize
-from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.files import FileLock, atomic_write, read_csv, rows_to_csv
 
 if TYPE_CHECKING:
-    from pendulum_lqg.bench.experiments import ExperimentSpec, WorkUnit
+    from pendulum_lqg.bench.experiments import Configuration, ExperimentSpec, WorkUnit
 
 __all__ = ["ResultsDir", "atomic_write", "check_name", "markdown_table", "read_csv",
            "rows_to_csv", "summarize_configs", "unit_columns", "versions"]
@@ -305,9 +305,33 @@ def summarize_configs(spec: ExperimentSpec, rows: list[dict[str, Any]]) -> dict[
     for cfg in spec.configurations:
         mine = [r for r in rows if r["config"] == cfg.index]
         entry = {"index": cfg.index, "values": cfg.values, "label": cfg.label,
-                 "summary": summarize(mine) if mine else None}
+                 "summary": summarize(mine) if mine else None, "theory": config_theory(cfg)}
         out["configurations"].append(entry)
     return out
+
+
+def config_theory(cfg: Configuration) -> dict[str, Any] | None:
+    """The closed-form stationary loop of a configuration (:func:`~pendulum_lqg.analysis.theory.
+    policy_theory`, on the linearisation of the simulated plant: its own linear plant, or the
+    exact ZOH for MuJoCo), as the summary's ``theory`` entry; ``None`` for what the theory does
+    not model (plugins, delays, dropout, lags, force noise, randomised plants)."""
+    from pendulum_lqg.analysis.theory import policy_theory
+    from pendulum_lqg.plugins import build_policy
+
+    if cfg.plugin is not None:
+        return None
+    try:
+        scenario, spec = cfg.build()
+        nominal, simulated = cfg.plants(scenario)
+        policy = build_policy(None, plant=nominal, scenario=scenario, spec=spec)
+        res = policy_theory(simulated, scenario, policy)
+    except PendulumLQGError:
+        return None
+    return {"plant": res.plant, "spectral_radius": res.spectral_radius, "stable": res.stable,
+            "rms_theta": res.rms["theta"], "rms_p": res.rms["p"], "rms_u": res.u_std,
+            "rms_est_err_theta": res.estimate_error_std["theta"],
+            "rms_est_err_p_dot": res.estimate_error_std["p_dot"], "cost_rate": res.cost_rate,
+            "cost_J": res.cost_J, "verdict": res.verdict}
 
 
 def _fmt(stat: dict[str, float], digits: int = 3) -> str:
@@ -319,14 +343,20 @@ def _fmt(stat: dict[str, float], digits: int = 3) -> str:
     return f"{mean:.{digits}g} ± {se:.2g}"
 
 
+def _theory_cell(theory: dict[str, Any], key: str) -> str:
+    return _fmt({"mean": theory[key], "se": float("nan")}) if key in theory else "–"
+
+
 def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
     """The summary as a Markdown table (one row per configuration)."""
     configs = summary["configurations"]
     keys = list(spec.configurations[0].values) if spec.configurations else []
-    head = [*keys, "success [95 % CI]", "J (successes)", "RMS θ [rad]", "max abs θ [rad]",
-            "RMS p [m]", "RMS u [N]", "saturated", "RMS θ̂−θ [rad]", "RMS ṗ̂−ṗ [m/s]",
-            "failures"]
-    lines = [f"**{spec.name}** — {spec.episodes} episodes per configuration, seed {spec.seed}",
+    head = [*keys, "success [95 % CI]", "J (successes)", "RMS θ [rad]", "theory", "max abs θ [rad]",
+            "RMS p [m]", "theory", "RMS u [N]", "theory", "saturated", "RMS θ̂−θ [rad]", "theory",
+            "RMS ṗ̂−ṗ [m/s]", "loop radius", "failures"]
+    lines = [f"**{spec.name}** — {spec.episodes} episodes per configuration, seed {spec.seed}; "
+             "each *theory* column is the stationary value of the linearised loop with the "
+             "limits off (`pendulum-lqg theory`), the loop radius its spectral radius",
              "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for c in configs:
         s = c["summary"]
@@ -334,10 +364,13 @@ def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
             continue
         lo, hi = s["success_ci95"]
         fails = ", ".join(f"{k} {v}" for k, v in sorted(s["failures"].items())) or "–"
+        th = c.get("theory") or {}
         cells = [str(c["values"][k]) for k in keys] + [
             f"{s['success_rate']:.1%} [{lo:.1%}, {hi:.1%}]", _fmt(s["cost"]),
-            _fmt(s["rms_theta"]), _fmt(s["max_abs_theta"]), _fmt(s["rms_p"]), _fmt(s["rms_u"]),
+            _fmt(s["rms_theta"]), _theory_cell(th, "rms_theta"), _fmt(s["max_abs_theta"]),
+            _fmt(s["rms_p"]), _theory_cell(th, "rms_p"), _fmt(s["rms_u"]), _theory_cell(th, "rms_u"),
             f"{s['saturated_fraction']['mean']:.1%}", _fmt(s["rms_est_err_theta"]),
-            _fmt(s["rms_est_err_p_dot"]), fails]
+            _theory_cell(th, "rms_est_err_theta"), _fmt(s["rms_est_err_p_dot"]),
+            f"{th['spectral_radius']:.4f}" if th else "–", fails]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

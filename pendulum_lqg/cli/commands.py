@@ -8,6 +8,7 @@ import sys
 from typing import Any
 
 from pendulum_lqg.cli.parser import DEFAULT_RECORDING, cfg_error, jsonable, noise_from_args, spec_from_args
+from pendulum_lqg.cli.theory import limit_fields
 
 
 # ---- run -----------------------------------------------------------------------------------------
@@ -30,13 +31,15 @@ def cmd_run(args: argparse.Namespace) -> int:
                         measurement_delay=args.measurement_delay,
                         actuator_delay=args.actuator_delay, dropout=args.dropout,
                         actuator_tau=args.actuator_tau,
-                        randomize=Randomization.from_mapping(_randomize(args.randomize)))
+                        randomize=Randomization.from_mapping(_randomize(args.randomize)),
+                        **limit_fields(args))
     plugin = is_plugin_ref(name)
     spec = spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
     policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)
     recording = args.record is not None or args.spawn
     check_at_most("--episodes", args.episodes, MAX_RUN_EPISODES,
                   "run keeps every row in memory; bench streams larger studies to disk")
+    _check_plot_args(args)
     if recording:
         check_at_most("--episodes", args.episodes, MAX_RECORDED_EPISODES,
                       "episodes recorded with --record/--spawn, whose trajectories are kept")
@@ -64,6 +67,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(f"recording: {stats.path} ({stats.episodes} episode(s), {stats.bytes:,} bytes"
               + (", streamed to the viewer" if stats.viewer_reached else "") + ")",
               file=sys.stderr)
+    if args.plot is not None:
+        _plot_episode(plant, scenario, policy, args, res.trajectories)
     if args.json:
         print(json.dumps(jsonable(out), indent=2))
     else:
@@ -86,6 +91,39 @@ def _check_recording_target(args: argparse.Namespace) -> None:
 
     output_file("--record", recording_path(args.record if args.record is not None
                                            else DEFAULT_RECORDING), what="recording")
+
+
+def _check_plot_args(args: argparse.Namespace) -> None:
+    """``--plot`` / ``--plot-episode`` checked before anything runs."""
+    if args.plot is None:
+        if args.plot_episode != 0:
+            raise cfg_error("--plot-episode: needs --plot FILE (the picture it selects)")
+        return
+    from pendulum_lqg.analysis.episode_plot import check_plot_path
+
+    check_plot_path(args.plot)
+    if args.plot_episode >= args.episodes:
+        raise cfg_error(f"--plot-episode: expected an episode of this run, 0 … {args.episodes - 1}, "
+                        f"got {args.plot_episode}")
+
+
+def _plot_episode(plant: Any, scenario: Any, policy: Any, args: argparse.Namespace,
+                  trajectories: list[Any] | None) -> None:
+    """Draw episode ``--plot-episode`` to ``--plot``. Without a recording its trajectory is
+    run again on its own: an episode's result does not depend on the batch it ran in."""
+    from pendulum_lqg.analysis.episode_plot import episode_title, plot_episode, save_episode_plot
+    from pendulum_lqg.core.runner import run_episodes
+
+    k = args.plot_episode
+    mine = [tr for tr in trajectories or [] if tr.episode == k]
+    if not mine:
+        mine = run_episodes(plant, scenario, policy, seed=args.seed, episodes=[k],
+                            backend=args.backend, nthread=args.nthread,
+                            trajectory=True).trajectories or []
+    fig = plot_episode(mine[0], plant=plant, scenario=scenario,
+                       title=f"{policy.name}: {episode_title(mine[0])}")
+    path = save_episode_plot(fig, args.plot)
+    print(f"plot: {path} (episode {k})", file=sys.stderr)
 
 
 def _randomize(items: list[str] | None) -> dict[str, list[float]]:

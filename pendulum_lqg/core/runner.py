@@ -192,8 +192,9 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: i
             if log is not None:
                 snap = dict(t=sim.t, x=x_now, y=y, **estimator_snapshot(driven, x_hat, sim.n))
             res = sim.step(u, x_hat=x_hat)
-            if log is not None:     # u: the requested force after saturation
-                log.add(sim.ids, u=res.requested, cost=res.cost, states=res.states, **snap)
+            if log is not None:     # u: the requested force after saturation; u_policy: before
+                log.add(sim.ids, u=res.requested, cost=res.cost, states=res.states,
+                        u_policy=np.asarray(u, dtype=float).reshape(-1), **snap)
             if res.failed.any():
                 keep = np.nonzero(~res.failed)[0]
                 sim.select(keep)

@@ -20,7 +20,8 @@ class Trajectory:
     y_true : (N, 2) noise-free measurement; u : (N,) applied force; x_hat : (N, 4) estimate used;
     x_prior : (N, 4) a-priori estimate; innovation : (N, 2); P : (N, 4, 4) a-posteriori covariance
     (nan if the estimator has none); cost : (N,) running cost at the end of each period;
-    t_physics : (N·k,), states : (N·k, 4)
+    t_physics : (N·k,), states : (N·k, 4); u_policy : (N,) the force the policy asked for, before
+    saturation (``u`` is that force saturated to ±u_max)
     """
 
     episode: int
@@ -38,6 +39,7 @@ class Trajectory:
     t_physics: np.ndarray
     states: np.ndarray
     row: dict[str, object] = field(default_factory=dict)
+    u_policy: np.ndarray | None = None
 
 
 
@@ -73,7 +75,8 @@ class TrajectoryLog:
                 episode=e, seed=seeds[e], t=stack["t"], x=stack["x"], y=stack["y"],
                 y_true=stack["x"][:, :2], u=stack["u"], x_hat=stack["x_hat"],
                 x_prior=stack["x_prior"], innovation=stack["innovation"], P=stack["P"],
-                cost=cost, t_physics=t_phys, states=states, row=rows[e]))
+                cost=cost, t_physics=t_phys, states=states, row=rows[e],
+                u_policy=stack.get("u_policy")))
         return out
 
 
