@@ -21,6 +21,8 @@ Usage::
     uv run python benchmarks/instructions.py env [--steps 1000] [--tree PATH]
     uv run python benchmarks/instructions.py vector [--steps 100]
     uv run python benchmarks/instructions.py loop [--episodes 64]
+    uv run python benchmarks/instructions.py env --out env.callgrind   # keep the profile, then
+    callgrind_annotate --inclusive=yes env.callgrind | head -60         # per-function counts
 
 It needs ``valgrind`` on the PATH (``apt-get install valgrind``); a run takes a minute or two.
 """
@@ -89,6 +91,8 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=None, help="env or vector steps (1000 / 100)")
     ap.add_argument("--episodes", type=int, default=64, help="loop: episodes")
     ap.add_argument("--tree", default=None, help="a checkout whose pendulum_lqg to run")
+    ap.add_argument("--out", default=None,
+                    help="keep callgrind's profile in this file (for callgrind_annotate)")
     ap.add_argument("--inner", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     count = args.episodes if args.kind == "loop" else (args.steps or
@@ -102,8 +106,9 @@ def main() -> None:
     if args.tree:
         env["PYTHONPATH"] = os.path.abspath(args.tree)
     with tempfile.TemporaryDirectory() as tmp:
+        profile = os.path.abspath(args.out) if args.out else f"{tmp}/callgrind.out"
         cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no",
-               f"--callgrind-out-file={tmp}/callgrind.out", sys.executable, os.path.abspath(__file__),
+               f"--callgrind-out-file={profile}", sys.executable, os.path.abspath(__file__),
                args.kind, "--inner", "--steps", str(count), "--episodes", str(count)]
         done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
     found = re.search(r"I\s+refs:\s+([\d,]+)", done.stderr)

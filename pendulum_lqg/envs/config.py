@@ -147,7 +147,10 @@ def step_reward(cost: np.ndarray | np.float64 | float, failed: np.ndarray | bool
         if np.count_nonzero(failed):
             r[failed] = 0.0
         return r
-    return 0.0 if failed else max(float(r), REWARD_FLOOR)
+    if failed:
+        return 0.0
+    r = float(r)
+    return REWARD_FLOOR if REWARD_FLOOR > r else r       # max(r, floor) without the call
 
 
 def _action_force(action: object, n: int) -> np.ndarray:
@@ -207,7 +210,7 @@ class Actions:
     def force(self, action: object) -> float:
         """The requested force [N] of a single env's action (shape (1,))."""
         if type(action) is np.ndarray and action.shape == (1,) and action.dtype.kind == "f":
-            u = float(action[0])                               # the common case, kept cheap
+            u = action.item()                                  # the common case, kept cheap
             if not math.isfinite(u):
                 raise PendulumLQGError(f"action: expected finite forces, got {action!r}")
         else:
