@@ -285,7 +285,7 @@ class Simulator:
         _, reason, fail_step = rules.detect_failure(
             v, reset, theta_max=self.scenario.theta_max, track_limit=self.track)
         if fail_step is None:                           # no row failed: the reason is FAIL_NONE
-            cost, code = float(rules.period_cost(v.z, self.weights)[0]), rules.FAIL_NONE
+            cost, code = rules.period_cost(v.z, self.weights).item(), rules.FAIL_NONE
         else:
             cost = float(rules.period_integrals(v.z, fail_step, h=self.h, weights=self.weights)[2][0])
             code = int(reason[0])

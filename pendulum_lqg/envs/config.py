@@ -215,7 +215,7 @@ class Actions:
                 raise PendulumLQGError(f"action: expected finite forces, got {action!r}")
         else:
             u = float(_action_force(action, 1)[0])
-        return self._to_newtons(u)
+        return self._to_newtons(u) if self.normalize else u
 
     def forces(self, action: object, n: int) -> np.ndarray:
         return self._to_newtons(_action_force(action, n))

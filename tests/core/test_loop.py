@@ -470,3 +470,26 @@ def test_batch_physics_direct_and_public_rollout_agree(plant, n):
     assert resets[0].tolist() == [False] * (n - 1) + [n > 1]
     calm = slice(0, max(1, n - 1))                   # the rows MuJoCo did not reset
     assert np.all(bufs[0][calm, 1:k + 1, :4] != x[calm, None, :])                     # they moved
+
+
+@pytest.mark.parametrize("rows", [1, 200])                 # a mask tested by its bytes; a reduced one
+def test_the_fast_failure_check_sees_any_one_number_out_of_bounds(rows):
+    """``all_inside`` is True exactly when every number of the period is strictly inside its bound:
+    one number at its bound, or a nan, anywhere in the buffer makes it False."""
+    from pendulum_lqg.core.period import SMALL_MASK, PeriodBuffer
+
+    k = 10
+    bounds = rules.failure_bounds(theta_max=0.5, track_limit=2.4, u_max=10.0)
+    view = PeriodBuffer(rows, k, bounds).view(rows)
+    assert view.small == (view.inside.size <= SMALL_MASK) and view.small == (rows == 1)
+    rng = np.random.default_rng(5)
+    view.buf[...] = rng.uniform(-0.99, 0.99, view.buf.shape) * bounds
+    assert rules.all_inside(view)
+    # (column, value): θ at θ_max, p at −track, a nan velocity, a force beyond 2·u_max
+    for col, value in ((1, bounds[1]), (0, -bounds[0]), (2, np.nan), (4, 2 * bounds[4])):
+        for row, step in [(0, 0), (rows - 1, k + 1), (rows // 2, k // 2)]:
+            saved = view.buf[row, step, col]
+            view.buf[row, step, col] = value
+            assert not rules.all_inside(view), (col, value, row, step)
+            view.buf[row, step, col] = saved
+    assert rules.all_inside(view)
