@@ -167,6 +167,7 @@ class _Rows:
       zeroes them. The batch stops a simulation (and :meth:`BatchPhysics.advance` reports its
       reset) when a counter rises; a counter left at 1 by an earlier instability would not rise
       when MuJoCo resets the data again, and the reset state would pass for a cart at rest;
+    * ``one``: a single row, whose reset :meth:`BatchPhysics.advance` tells by one float;
     * ``control``: the per-step control buffer; ``ids``: the simulations 0 … n−1 for
       ``Batch.rollout`` (``None`` when they are all of the batch's);
     * ``rec``, ``out``, ``records``: where the rollout records, as the public call and the C++ core
