@@ -3,7 +3,7 @@
 Needs the ``rl`` extra (stable-baselines3, sb3-contrib and torch)::
 
     pip install torch==2.13.0   # a CPU build; or let pip pick one
-    pip install 'dist/pendulum_lqg-0.4.1-py3-none-any.whl[rl]'
+    pip install 'dist/pendulum_lqg-0.5.0-py3-none-any.whl[rl]'
     python benchmarks/train_agents.py --out experiments/agents/models      # all four baselines
     python benchmarks/train_agents.py --only ppo-lecture --steps 20000    # one, a shorter budget
 

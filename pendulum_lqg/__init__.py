@@ -26,7 +26,7 @@ import sys
 from pathlib import PurePath
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.4.1"
+__version__ = "0.5.0"
 __all__ = ["ENV_ID", "SCHEMA_VERSION", "PolicyContext", "__version__", "register_envs"]
 
 #: The Gymnasium id of the cart-pole LQG environment (:class:`pendulum_lqg.envs.single.CartPoleLQGEnv`).
