@@ -35,6 +35,19 @@ def positive_number(name: str, value: Any, *,
     return float(value)
 
 
+def positive_limit(name: str, value: Any) -> float:
+    """A limit [its unit] as a float: a positive number, or ``inf`` (the string ``"inf"`` too, as
+    TOML and the command line may spell it) for no limit; else a :class:`ConfigError` naming
+    ``name``: "theta_max: expected a positive number or inf, got -1"."""
+    if isinstance(value, str) and value.strip().lower() in ("inf", "+inf", "infinity"):
+        return float("inf")
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.integer
+                                                             | np.floating) \
+            or np.isnan(value) or value <= 0:
+        raise ConfigError(f"{name}: expected a positive number or inf, got {value!r}")
+    return float(value)
+
+
 def config_vector(name: str, value: Any, n: int, *, nonneg: bool = False,
                   ) -> tuple[float, ...]:
     """``value`` as a tuple of ``n`` finite floats; a single number is repeated ``n`` times.

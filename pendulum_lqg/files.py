@@ -1,25 +1,99 @@
-"""Files that are never half-written, and the CSV form of episode rows.
+"""Files that are never half-written, outputs that only ever replace regular files, and the CSV
+form of episode rows.
 
 Kept apart from :mod:`pendulum_lqg.bench.results` (which knows experiments) so that everything that
-writes files — sweeps, studies, reports — can use them without importing the experiment layer.
+writes files — sweeps, studies, reports, scores, boards — can use them without importing the
+experiment layer. Reading files at the boundary is :mod:`pendulum_lqg.boundary`'s.
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import os
+import stat
 from pathlib import Path
+
+from pendulum_lqg.errors import ConfigError
+
+
+def output_file(where: str, path: str | os.PathLike[str] | None, *, what: str = "file") -> Path:
+    """``path`` checked as the target of an output file, before any work starts.
+
+    A target that exists must be a regular file (a symbolic link is followed): a device, a FIFO, a
+    socket or a folder is refused, so an output never replaces what is not ours. ``''`` is refused.
+    The parent folder is created and must be writable. Errors are one :class:`ConfigError` line
+    naming ``where`` (the option, e.g. ``--out``)."""
+    text = "" if path is None else os.fspath(path)
+    if not str(text).strip():
+        raise ConfigError(f"{where}: expected a path for the {what}, got {text!r}")
+    out = Path(text)
+    target = regular_target(where, out, what=what)
+    parent = target.parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot create the folder {parent}: "
+                          f"{exc.strerror or exc}") from None
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ConfigError(f"{where}: the folder {parent} is not writable")
+    return target
+
+
+def regular_target(where: str, path: Path, *, what: str = "file") -> Path:
+    """The file ``path`` names (a symbolic link followed), which must be absent or a regular
+    file; anything else — a device, a FIFO, a socket, a folder — is one :class:`ConfigError` line,
+    and is left as it is."""
+    from pendulum_lqg.boundary import file_kind
+
+    target = path.resolve() if path.is_symlink() else path
+    try:
+        mode = os.stat(target).st_mode
+    except FileNotFoundError:
+        return target
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot inspect {path}: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(mode):
+        raise ConfigError(f"{where}: {path} is {file_kind(mode)}; expected a regular file or a "
+                          f"new path for the {what} (it is left as it is)")
+    return target
 
 
 def atomic_write(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file and ``os.replace`` (never half-written)."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8", newline="") as fh:
-        fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+    """Write ``text`` to ``path`` so that ``path`` is never half-written and nothing is left behind.
+
+    The text goes to a new temporary file beside ``path`` (created exclusively), is flushed and
+    fsynced, and replaces ``path`` with ``os.replace``; the folder is fsynced after the rename so
+    the new name survives a crash. On any error — a full disk, a Ctrl-C — the temporary file is
+    removed and ``path`` keeps its old content. A ``path`` that exists and is not a regular file
+    (a device, a FIFO, a folder) is refused: only regular files are ever replaced."""
+    target = regular_target("out", Path(path))
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    try:
+        with open(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    _fsync_folder(target.parent)
+
+
+def _fsync_folder(folder: Path) -> None:
+    """fsync a folder (its entries: a rename in it); a no-op where folders cannot be opened."""
+    try:
+        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:
+        return
+    try:
+        with contextlib.suppress(OSError):     # some file systems refuse fsync on a folder
+            os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def _cell(v: object) -> str:
@@ -56,3 +130,68 @@ def _parse(v: str) -> object:
 def read_csv(path: Path) -> list[dict[str, object]]:
     with open(path, newline="", encoding="utf-8") as fh:
         return [{k: _parse(v) for k, v in row.items()} for row in csv.DictReader(fh)]
+
+
+class FileLock:
+    """An exclusive lock held by this process on the file ``path`` (a results folder's ``.lock``).
+
+    ``flock`` on the open file: the kernel releases it when the process ends, however it ends, so a
+    killed run leaves no lock to take over and two runs can never both hold it (the old PID-file
+    lock could be taken by two runs that both saw a dead PID). The file holds the holder's PID for
+    the message of a run that is refused. It is removed on release while still locked; a run that
+    opened it just before and locks the removed file sees that the path no longer names what it
+    locked and tries again. Where ``flock`` does not exist (Windows), the file is created
+    exclusively instead and a crashed run's lock must be removed by hand (the message says so).
+    """
+
+    def __init__(self, path: Path, *, where: str) -> None:
+        """``where`` begins the refusal's line (``out: results/lecture``)."""
+        self.path, self.where = Path(path), where
+        self._fd: int | None = None
+
+    def acquire(self) -> None:
+        """Take the lock, or raise a one-line :class:`ConfigError` naming the holder's PID."""
+        try:
+            import fcntl
+        except ImportError:                     # no flock: an exclusive create
+            self._fd = self._create_exclusive()
+            return
+        while True:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.read(fd, 32).decode(errors="replace").strip() or "?"
+                os.close(fd)
+                raise ConfigError(f"{self.where} is being written by another run (pid {holder})"
+                                  ) from None
+            try:
+                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
+            os.close(fd)                        # its holder removed it meanwhile: again
+        os.ftruncate(fd, 0)
+        os.write(fd, str(os.getpid()).encode())
+        self._fd = fd
+
+    def _create_exclusive(self) -> int:
+        try:
+            fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            raise ConfigError(f"{self.where} is being written by another run (or a crashed "
+                              f"one: remove {self.path} if none runs)") from None
+        os.write(fd, str(os.getpid()).encode())
+        return fd
+
+    def release(self) -> None:
+        if self._fd is None:
+            return
+        self.path.unlink(missing_ok=True)       # removed while still held (see the class doc)
+        os.close(self._fd)                      # closing the file drops the flock
+        self._fd = None
+
+    @property
+    def held(self) -> bool:
+        return self._fd is not None

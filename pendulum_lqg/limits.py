@@ -40,6 +40,16 @@ MAX_PERF_STEPS = 10**7
 #: Floats the finite-horizon Riccati sweep keeps: ``P`` is (horizon + 1) × n × n (and ``K``
 #: horizon × m × n beside it), all in memory.
 MAX_RICCATI_FLOATS = 2 * 10**7
+#: Episodes per suite of one ``score`` (``--episodes`` or a suite file's ``episodes``): the rows of
+#: the entry, its reference and the full-state bound are kept in memory and written to the score file.
+MAX_SCORE_EPISODES = 100_000
+#: Bytes of one file read at the boundary (experiment and suite TOML, score JSON, training records):
+#: read whole into memory; the largest a score file of :data:`MAX_SCORE_EPISODES` per suite needs
+#: is about a tenth of this.
+MAX_INPUT_BYTES = 256 * 2**20
+#: Nesting of tables and lists in a file read at the boundary: the project's formats nest at most
+#: five deep; the parsers recurse once per level.
+MAX_NESTING = 64
 #: Episodes ``run`` steps together: bounded so memory does not grow with ``--episodes`` and long
 #: runs report progress between batches (results do not depend on the batching).
 RUN_BATCH = 1024

@@ -37,6 +37,7 @@ import importlib
 import importlib.util
 import inspect
 import sys
+import types
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -45,6 +46,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError, PluginError
+from pendulum_lqg.watchdog import watched
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.noise import NoiseModel
@@ -177,27 +179,7 @@ def load_factory(ref: str, *, base_dir: Path | None = None) -> PolicyFactory:
     """
     module_name, attr = _split(resolve_ref(ref, base_dir))
     if _is_path(module_name):
-        path = Path(module_name)
-        if not path.is_file():
-            raise PluginError(f"policy {ref!r}: no file {path}")
-        try:
-            content = path.read_bytes()
-        except OSError as exc:
-            raise PluginError(f"policy {ref!r}: cannot read {path}: {exc.strerror or exc}") from exc
-        where = hashlib.sha256(str(path).encode()).hexdigest()[:10]
-        name = f"_pendulum_lqg_plugin_{path.stem}_{where}_{hashlib.sha256(content).hexdigest()[:10]}"
-        module = sys.modules.get(name)
-        if module is None:
-            spec = importlib.util.spec_from_file_location(name, path)
-            if spec is None or spec.loader is None:
-                raise PluginError(f"policy {ref!r}: cannot import {path}")
-            module = importlib.util.module_from_spec(spec)
-            sys.modules[name] = module
-            try:
-                guarded(ref, f"importing {path}", spec.loader.exec_module, module)
-            except PluginError:
-                del sys.modules[name]
-                raise
+        module = _import_file(ref, Path(module_name))
     else:
         try:
             module = guarded(ref, "import", importlib.import_module, module_name)
@@ -211,6 +193,36 @@ def load_factory(ref: str, *, base_dir: Path | None = None) -> PolicyFactory:
         raise PluginError(f"policy {ref!r}: {attr} is not callable (expected a factory taking a "
                           "PolicyContext)")
     return factory
+
+
+def _import_file(ref: str, path: Path) -> types.ModuleType:
+    """The module of the plug-in file ``path``, run from exactly the bytes read here: read, hashed
+    (the module's name carries the hash), compiled and executed — never a cached ``.pyc``, whose
+    check (the source's mtime in whole seconds and its size) misses an edit within the same second.
+    The same bytes are what :func:`source_digest` fingerprints."""
+    if not path.is_file():
+        raise PluginError(f"policy {ref!r}: no file {path}")
+    try:
+        content = path.read_bytes()
+    except OSError as exc:
+        raise PluginError(f"policy {ref!r}: cannot read {path}: {exc.strerror or exc}") from exc
+    where = hashlib.sha256(str(path).encode()).hexdigest()[:10]
+    name = f"_pendulum_lqg_plugin_{path.stem}_{where}_{hashlib.sha256(content).hexdigest()[:10]}"
+    module = sys.modules.get(name)
+    if module is not None:
+        return module
+    code = guarded(ref, f"compiling {path}", compile, content, str(path), "exec",
+                   dont_inherit=True)
+    spec = importlib.util.spec_from_loader(name, loader=None, origin=str(path))
+    module = importlib.util.module_from_spec(spec)       # type: ignore[arg-type]
+    module.__file__ = str(path)
+    sys.modules[name] = module                 # dataclasses and pickling look the module up
+    try:
+        guarded(ref, f"importing {path}", exec, code, module.__dict__)
+    except PluginError:
+        del sys.modules[name]
+        raise
+    return module
 
 
 def source_digest(ref: str, *, base_dir: Path | None = None) -> str:
@@ -258,17 +270,30 @@ def _one_line(exc: BaseException) -> str:
 
 
 def guarded(ref: str, what: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
-    """``fn(*args, **kwargs)`` — plugin code — with whatever it raises turned into one
-    :class:`PluginError` line naming the plugin and ``what``: every exception, ``SystemExit``
-    (``sys.exit`` in a plugin) included, except a Ctrl-C (``KeyboardInterrupt``), which stops the
-    run as a Ctrl-C does. A plugin cannot end the run with a success status or without a message
-    this way (``os._exit`` ends the process at once, uncatchable; docs/reliability.md)."""
+    """``fn(*args, **kwargs)`` — plugin code — through :func:`guard`, naming the plug-in
+    ``policy 'REF'``."""
+    return guard(f"policy {ref!r}", what, fn, *args, **kwargs)
+
+
+def guard(label: str, what: str, fn: Callable[..., Any], *args: Any,
+          passing: tuple[type[BaseException], ...] = (), **kwargs: Any) -> Any:
+    """``fn(*args, **kwargs)`` — user code: a plug-in's or an agent's — with whatever it raises
+    turned into one :class:`PluginError` line ``LABEL: WHAT raised …``: every exception,
+    ``SystemExit`` (``sys.exit`` in user code) included, except a Ctrl-C (``KeyboardInterrupt``),
+    which stops the run as a Ctrl-C does. A call that does not return within the active
+    :class:`~pendulum_lqg.watchdog.Watchdog`'s limit is stopped with a
+    :class:`~pendulum_lqg.watchdog.CallTimeout` line. User code cannot end the run with a success
+    status or without a message this way (``os._exit`` ends the process at once, uncatchable;
+    docs/reliability.md). Exceptions of the types ``passing`` are re-raised as they are (an
+    agent's factory declines a suite with :class:`~pendulum_lqg.errors.NotApplicable`)."""
+    keep: tuple[type[BaseException], ...] = (PluginError, KeyboardInterrupt, *passing)
     try:
-        return fn(*args, **kwargs)
-    except (PluginError, KeyboardInterrupt):
+        with watched(label, what):
+            return fn(*args, **kwargs)
+    except keep:
         raise
     except BaseException as exc:
-        raise PluginError(f"policy {ref!r}: {what} raised {_one_line(exc)}") from exc
+        raise PluginError(f"{label}: {what} raised {_one_line(exc)}") from exc
 
 
 _MISSING = object()
@@ -485,8 +510,10 @@ def build_policy(name: str | None, *, plant: Plant, scenario: Scenario,
     if name is not None:
         controller, observer = split_builtin(name)
         spec = dataclasses.replace(spec, controller=controller, observer=observer)
+    from pendulum_lqg.core.rules import limits
+
     return design_policy(plant, scenario.control_period, scenario.noise, spec,
-                         delays=delay_periods(scenario))
+                         delays=delay_periods(scenario), u_max=limits(plant, scenario)[2])
 
 
 def split_builtin(name: str) -> tuple[str, str]:

@@ -24,6 +24,11 @@ Observers
     measurement and actuator delay lines (exact for whole periods), whose controller acts on the
     state predicted over the actuator delay, ``u_n = −K x̂_{n+d_a|n}``
     (:func:`~pendulum_lqg.design.augment_delays`). The other observers ignore delays.
+    ``luenberger-euler`` / ``kalman-bucy-euler`` the lecture's own observers: the continuous
+    Luenberger (poles ``observer_poles``) or Kalman–Bucy gain L in the observer ODE stepped by
+    forward Euler at the control period, ``x̂ ← x̂ + T·(A x̂ + B u + L (y − C x̂))`` (a predictor:
+    the force at sample n uses y up to n − 1). With ``lqr`` and ``plant = "linear-euler"`` this is
+    the lecture's simulation exactly (:func:`euler_observer`).
 """
 
 from __future__ import annotations
@@ -56,7 +61,8 @@ from pendulum_lqg.plant import Plant, steps_per_period
 
 Controller = Literal["lqr", "dlqr"]
 Observer = Literal["none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy",
-                   "reduced-order", "ackermann", "lmi", "h2", "hinf", "kalman-delay"]
+                   "reduced-order", "ackermann", "lmi", "h2", "hinf", "kalman-delay",
+                   "luenberger-euler", "kalman-bucy-euler"]
 
 
 @dataclass(frozen=True)
@@ -192,6 +198,29 @@ def _emulated_observer(A: np.ndarray, B: np.ndarray, C: np.ndarray, L: np.ndarra
     return E[:n, :n], E[:n, n:n + m], E[:n, n + m:]
 
 
+def euler_observer(lin: ContinuousModel, noise: NoiseModel, dt: float, spec: DesignSpec,
+                   ) -> tuple[PredictorEstimator, np.ndarray]:
+    """The lecture's observer (seed 003): a continuous gain L, its ODE stepped by forward Euler.
+
+    ``x̂[n+1] = x̂[n] + T·(A x̂[n] + B u[n] + L (y[n] − C x̂[n]))``, i.e. the predictor
+    ``F = I + T(A − LC)``, ``G_u = T B``, ``G_y = T L``. L places the continuous poles
+    ``spec.observer_poles`` (``luenberger-euler``; the lecture writes ``A + LC`` with the opposite
+    sign of L) or is the Kalman–Bucy gain for the density W and ``V·T`` (``kalman-bucy-euler``;
+    the lecture's ``care(Aᵀ, Cᵀ, Σ_w, Σ_v)`` with ``Σ_w = 0.04·I``, ``Σ_v = 0.01·I`` has the same
+    ratio, hence the same gain). Returns the estimator and L (4, 2).
+    """
+    A, B, C = lin.A, lin.B, lin.C
+    if spec.observer == "luenberger-euler":
+        L = design.luenberger(A, C, spec.observer_poles).L
+    else:
+        G, W = noise_design_matrices(lin, noise, dt)
+        L = design.kalman(A, G, C, W, noise.V_density(dt)).L
+    n = A.shape[0]
+    est = PredictorEstimator(np.eye(n) + dt * (A - L @ C), dt * B, dt * L, C, gain=L,
+                             Phi=np.eye(n) + dt * A, Gamma=dt * B)
+    return est, L
+
+
 def noise_design_matrices(plant_lin: ContinuousModel, noise: NoiseModel, dt: float,
                           ) -> tuple[np.ndarray, np.ndarray]:
     """``(G, W)`` of the continuous process-noise model matching the simulator's injection."""
@@ -214,7 +243,7 @@ def per_sample_process_covariance(plant_lin: ContinuousModel, noise: NoiseModel,
 
 def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
                   spec: DesignSpec | None = None, *, linear: ContinuousModel | None = None,
-                  delays: tuple[int, int] = (0, 0)) -> Policy:
+                  delays: tuple[int, int] = (0, 0), u_max: float | None = None) -> Policy:
     """Design the policy ``spec`` for ``plant`` at ``control_period`` with the nominal noise.
 
     Parameters
@@ -226,6 +255,8 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
     linear : a precomputed :func:`~pendulum_lqg.linearize.linearize` result (to save time)
     delays : ``(measurement, actuator)`` delays in control periods that ``kalman-delay``
         compensates (:func:`delay_periods` of the scenario; the other observers ignore them)
+    u_max : the force limit the policy saturates its own output to [N] (default the plant's
+        ``ctrlrange``; :func:`~pendulum_lqg.core.rules.limits` of a scenario, ``inf`` for none)
     """
     spec = spec or DesignSpec()
     steps_per_period(plant, control_period)
@@ -290,6 +321,10 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
         est = DelayKalman(aug.Phi, aug.Gamma, aug.C, kf.L, aug.predict, P=kf.P, M=kf.M)
         info["L"], info["observer_poles"], info["P_kalman"] = kf.L, kf.poles, kf.P
         info["delays"], info["predict"] = tuple(int(d) for d in delays), aug.predict
+    elif spec.observer in ("luenberger-euler", "kalman-bucy-euler"):
+        est, L = euler_observer(lin, noise, dt, spec)
+        info["L"], info["observer_poles"] = L, np.linalg.eigvals(est.F)
+        info["observer_poles_continuous"] = np.linalg.eigvals(A - L @ C)
     else:  # continuous designs, emulated under sample-and-hold
         G, W = noise_design_matrices(lin, noise, dt)
         P_obs = None
@@ -309,7 +344,7 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
         info["L"], info["observer_poles"] = L, np.linalg.eigvals(F)
         info["observer_poles_continuous"] = np.linalg.eigvals(A - L @ C)
     info["noise_Qd"], info["noise_V"] = Qd_noise, V
-    return Policy(K=ctrl.K, estimator=est, u_max=plant.u_max,
+    return Policy(K=ctrl.K, estimator=est, u_max=plant.u_max if u_max is None else float(u_max),
                   name=f"{spec.controller}+{spec.observer}", info=info)
 
 

@@ -135,16 +135,15 @@ def save_episode_plot(fig: Figure, path: str | Path) -> Path:
 
 
 def check_plot_path(path: str | Path) -> Path:
-    """``path`` checked before anything runs: a known suffix, not an existing non-regular file."""
-    path = Path(path)
-    if path.suffix.lower() not in PLOT_SUFFIXES:
+    """``path`` checked before anything runs: a known suffix, and a target that
+    :func:`~pendulum_lqg.files.output_file` accepts (a new path or a regular file, never a device,
+    a FIFO or a folder; its folder created and writable)."""
+    from pendulum_lqg.files import output_file
+
+    if Path(path).suffix.lower() not in PLOT_SUFFIXES:
         raise ConfigError(f"--plot: expected a file name ending in {', '.join(PLOT_SUFFIXES)}, got "
                           f"{str(path)!r}")
-    if path.exists() and not path.is_file():
-        raise ConfigError(f"--plot: {path} exists and is not a regular file")
-    if not path.parent.is_dir():
-        raise ConfigError(f"--plot: the folder {path.parent} does not exist")
-    return path
+    return output_file("--plot", path, what="picture")
 
 
 def _limits(plant: Plant | None, scenario: Scenario | None, n: int) -> dict[int, float]:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -27,20 +26,12 @@ def kind_name(kind: type | tuple[type, ...]) -> str:
 
 
 def read_json(path: Path) -> dict[str, Any]:
-    """A results JSON file as a dict; a missing, non-UTF-8, invalid or non-object file is one
-    :class:`ConfigError` line naming the file."""
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except FileNotFoundError:
-        raise ConfigError(f"results: {path} is missing") from None
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"results: {path} is not UTF-8 text (byte {exc.object[exc.start]:#04x} "
-                          f"at offset {exc.start}); the file is corrupt") from exc
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ConfigError(f"results: {path} is not valid JSON ({exc.msg} at line {exc.lineno}, "
-                          f"column {exc.colno}); the file is corrupt") from exc
+    """A results JSON file as a dict, read through :func:`pendulum_lqg.boundary.read_json` (a
+    regular file, size and nesting bounded); a missing, non-UTF-8, invalid or non-object file is
+    one :class:`ConfigError` line naming the file."""
+    from pendulum_lqg.boundary import read_json as read_boundary_json
+
+    data = read_boundary_json(path, where="results")
     if not isinstance(data, dict):
         raise ConfigError(f"results: {path}: expected a JSON object, got {type(data).__name__}")
     return data

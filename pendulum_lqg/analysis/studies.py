@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from pendulum_lqg._config import check_keys
+from pendulum_lqg.boundary import read_json
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.jsonio import plain
 from pendulum_lqg.limits import MAX_FREQUENCIES, MAX_MAP_POINTS, check_at_most
@@ -330,7 +331,7 @@ def run_roa(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
     for cfg in spec.configurations:
         unit = out.units_dir / f"c{cfg.index:03d}.json"
         if unit.exists():
-            results.append(json.loads(unit.read_text()))
+            results.append(read_json(unit, where="unit"))   # regular, size and nesting bounded
             continue
         scenario, dspec = cfg.build()
         nominal, simulated = cfg.plants(scenario)

@@ -55,7 +55,6 @@ import itertools
 import json
 import math
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -83,7 +82,8 @@ GRID_KEYS = ("policy", "controller", "observer", "noise_scale", "control_period"
 SENSING_KEYS = ("measurement_delay", "actuator_delay", "dropout", "actuator_tau")
 DELAY_KINDS = ("measurement", "actuator")
 SCENARIO_KEYS = ("control_period", "duration", "x0", "x0_std", "estimate0", "theta_max",
-                 "settle_band", "cost_Q", "cost_R", *SENSING_KEYS, "randomize", "plant")
+                 "track_limit", "force_limit", "settle_band", "cost_Q", "cost_R", *SENSING_KEYS,
+                 "randomize", "plant")
 NOISE_KEYS = tuple(f.name for f in dataclasses.fields(NoiseModel))
 DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
 MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))
@@ -486,6 +486,7 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
     ``model_file`` replace the file's (``bench --episodes/--seed/--model``; as
     :meth:`ExperimentSpec.with_overrides`, but the file is validated once, with them).
     """
+    from pendulum_lqg.boundary import read_toml
     from pendulum_lqg.resources import experiment_names, experiment_path
 
     path = Path(name_or_path)
@@ -498,18 +499,7 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
     if not path.is_file():
         raise ConfigError(f"experiment: no file {name_or_path!r}; known experiments: "
                           + ", ".join(experiment_names()))
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"experiment: {path} is not UTF-8 text (TOML must be): byte "
-                          f"{exc.object[exc.start]:#04x} at offset {exc.start}") from exc
-    except OSError as exc:
-        raise ConfigError(f"experiment: cannot read {path}: {exc.strerror or exc}") from exc
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"experiment: {path} is not valid TOML: "
-                          f"{' '.join(str(exc).split())}") from exc
+    data = read_toml(path, where="experiment")       # a regular file, size and nesting bounded
     try:
         return parse_spec(_overridden(data, episodes, seed, model_file), name=path.stem,
                           base_dir=path.resolve().parent)

@@ -98,8 +98,8 @@ def run_sweep(spec: ExperimentSpec, out: str | Path | ResultsDir, *,
     executor : where units run (default :class:`~pendulum_lqg.bench.executors.LocalExecutor`)
     resume : complete an interrupted sweep (units already on disk are kept)
     force : overwrite the folder's results
-    progress : a progress bar on stderr (default: when stderr is a terminal); ``log`` gets one line
-        per unit instead when there is no bar
+    progress : a progress bar on stderr, never stdout (default: when stderr is a terminal); ``log``
+        gets one line per unit instead when there is no bar
     record : folder for Rerun recordings of each configuration's telling episodes
     nthread : rollout threads of the local executor / of each task
     on_mismatch : what a resume does with a unit file that fails its check (changed, cut, from
@@ -201,22 +201,11 @@ def _with_progress(outcomes: Iterable[Outcome], todo: list[WorkUnit], total: int
                     + (f" {status}" if status else ""))
             yield unit, rows, error
         return
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
+    from pendulum_lqg.progress import Progress
 
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                  TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
-                  transient=False) as bar:
-        task = bar.add_task("work units", total=total, completed=already)
+    with Progress("work units", total, done=already, enabled=True) as bar:
         for unit, rows, error in outcomes:
-            bar.update(task, description=unit.config.label[:60])
-            bar.advance(task)
+            bar.advance(description=unit.config.label[:60])
             yield unit, rows, error
 
 

@@ -1,5 +1,5 @@
 """The ``pendulum-lqg`` command: ``design``, ``run``, ``bench``, ``perf``, ``report``, ``score``,
-``board``.
+``board``, ``theory``.
 
 Modules: ``parser`` (the grammar and the arguments' conversions), ``design``, ``commands`` and
 ``score`` (one function per subcommand). Only argument parsing and presentation live here; every
@@ -10,6 +10,7 @@ and exits with status 2.
 
 from __future__ import annotations
 
+import argparse
 import sys
 from collections.abc import Sequence
 
@@ -17,14 +18,26 @@ from pendulum_lqg.cli.commands import cmd_bench, cmd_perf, cmd_report, cmd_run
 from pendulum_lqg.cli.design import cmd_design
 from pendulum_lqg.cli.parser import EXIT_USAGE, build_parser
 from pendulum_lqg.cli.score import cmd_board, cmd_score
+from pendulum_lqg.cli.theory import cmd_theory
+
+#: Exit status of a run stopped by Ctrl-C (128 + SIGINT, as a shell reports it).
+EXIT_INTERRUPTED = 130
 
 COMMANDS = {"design": cmd_design, "run": cmd_run, "bench": cmd_bench, "perf": cmd_perf,
-            "report": cmd_report, "score": cmd_score, "board": cmd_board}
+            "report": cmd_report, "score": cmd_score, "board": cmd_board, "theory": cmd_theory}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        return _dispatch(args)
+    except KeyboardInterrupt:   # Ctrl-C: one line; outputs are written only once complete
+        print("interrupted: stopped by Ctrl-C before the command finished", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _dispatch(args: argparse.Namespace) -> int:
     from pendulum_lqg.errors import PendulumLQGError
 
     try:

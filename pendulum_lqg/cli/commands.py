@@ -8,6 +8,7 @@ import sys
 from typing import Any
 
 from pendulum_lqg.cli.parser import DEFAULT_RECORDING, cfg_error, jsonable, noise_from_args, spec_from_args
+from pendulum_lqg.cli.theory import limit_fields
 
 
 # ---- run -----------------------------------------------------------------------------------------
@@ -30,7 +31,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                         measurement_delay=args.measurement_delay,
                         actuator_delay=args.actuator_delay, dropout=args.dropout,
                         actuator_tau=args.actuator_tau,
-                        randomize=Randomization.from_mapping(_randomize(args.randomize)))
+                        randomize=Randomization.from_mapping(_randomize(args.randomize)),
+                        **limit_fields(args))
     plugin = is_plugin_ref(name)
     spec = spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
     policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)
@@ -41,10 +43,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     if recording:
         check_at_most("--episodes", args.episodes, MAX_RECORDED_EPISODES,
                       "episodes recorded with --record/--spawn, whose trajectories are kept")
-        from pendulum_lqg.record.writer import recording_path
-
-        recording_path(args.record if args.record is not None else DEFAULT_RECORDING)
-    res = _run_in_batches(plant, scenario, policy, args, trajectory=recording)
+        _check_recording_target(args)
+    with _watchdog(args):
+        res = _run_in_batches(plant, scenario, policy, args, trajectory=recording)
     summary = summarize(res.rows)
     config = {"policy": policy.name, "seed": args.seed, "episodes": args.episodes,
               "backend": args.backend, "scenario": scenario.to_dict(),
@@ -73,6 +74,23 @@ def cmd_run(args: argparse.Namespace) -> int:
     else:
         _print_summary(policy.name, config, summary)
     return 0
+
+
+def _watchdog(args: argparse.Namespace) -> Any:
+    """The watchdog of the plug-in's calls (``--call-timeout``)."""
+    from pendulum_lqg.watchdog import call_timeout
+
+    return call_timeout(args.call_timeout)
+
+
+def _check_recording_target(args: argparse.Namespace) -> None:
+    """The recording's file, checked before any episode runs: not '' or a folder, and a new path
+    or a regular file (never a device or a FIFO)."""
+    from pendulum_lqg.files import output_file
+    from pendulum_lqg.record.writer import recording_path
+
+    output_file("--record", recording_path(args.record if args.record is not None
+                                           else DEFAULT_RECORDING), what="recording")
 
 
 def _check_plot_args(args: argparse.Namespace) -> None:
@@ -177,33 +195,27 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None
 def _run_in_batches(plant: Any, scenario: Any, policy: Any, args: argparse.Namespace, *,
                     trajectory: bool) -> Any:
     """``run_episodes`` over ``--episodes`` in batches (memory flat in the episode count; the rows
-    do not depend on the batching), with a progress line on stderr every few seconds once a run
-    takes long."""
-    import time
-
+    do not depend on the batching), with its progress on stderr (:mod:`pendulum_lqg.progress`)."""
     from pendulum_lqg import limits
     from pendulum_lqg.core.runner import BatchResult, run_episodes
     from pendulum_lqg.plant import steps_per_period
+    from pendulum_lqg.progress import Progress
 
     steps = scenario.n_periods * steps_per_period(plant, scenario.control_period)
     size = max(1, min(limits.RUN_BATCH, 20_000_000 // max(steps, 1)))    # ≤ ~2·10⁷ physics steps each
     total = args.episodes
     rows: list[dict[str, Any]] = []
     trajectories: list[Any] | None = [] if trajectory else None
-    t0 = last = time.perf_counter()
-    for start in range(0, total, size):
-        res = run_episodes(plant, scenario, policy, seed=args.seed,
-                           episodes=range(start, min(start + size, total)), backend=args.backend,
-                           nthread=args.nthread, trajectory=trajectory)
-        rows += res.rows
-        if trajectories is not None:
-            trajectories += res.trajectories or []
-        now = time.perf_counter()
-        if len(rows) < total and now - last >= limits.PROGRESS_EVERY_S:
-            eta = (now - t0) / len(rows) * (total - len(rows))
-            print(f"run: {len(rows):,}/{total:,} episodes, {now - t0:.0f} s, about {eta:.0f} s "
-                  "left", file=sys.stderr)
-            last = now
+    with Progress("run", total, unit="episodes", enabled=sys.stderr.isatty() and total > size,
+                  lines=True) as bar:
+        for start in range(0, total, size):
+            res = run_episodes(plant, scenario, policy, seed=args.seed,
+                               episodes=range(start, min(start + size, total)),
+                               backend=args.backend, nthread=args.nthread, trajectory=trajectory)
+            rows += res.rows
+            if trajectories is not None:
+                trajectories += res.trajectories or []
+            bar.advance(len(res.rows))
     return BatchResult(rows=rows, trajectories=trajectories)
 
 

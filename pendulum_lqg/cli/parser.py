@@ -11,8 +11,9 @@ from collections.abc import Callable
 from typing import Any, NoReturn
 
 from pendulum_lqg import __version__
+from pendulum_lqg.cli.score import add_call_timeout
 from pendulum_lqg.cli.score import add_parsers as add_score_parsers
-from pendulum_lqg.names import CONTROLLERS, OBSERVERS, PLANTS
+from pendulum_lqg.names import CONTROLLERS, LECTURE_POLICIES, OBSERVERS, PLANTS
 
 EXIT_USAGE = 2
 
@@ -115,6 +116,62 @@ def _add_design_options(p: argparse.ArgumentParser) -> None:
                         "forces on slider and hinge (default state)")
 
 
+def _limit(text: str) -> float:
+    """argparse type: a positive number of the limit's unit, or ``inf`` (no limit)."""
+    try:
+        v = float(text)
+    except ValueError:
+        v = -1.0
+    if not v > 0:                                    # also refuses nan
+        raise argparse.ArgumentTypeError(f"expected a positive number or inf, got {text!r}")
+    return v
+
+
+def add_limit_options(p: argparse.ArgumentParser) -> None:
+    """``--theta-max``, ``--track-limit``, ``--force-limit`` (``inf`` switches one off)."""
+    g = p.add_argument_group("limits (inf switches a limit off; core/rules.py applies them)")
+    g.add_argument("--theta-max", type=_limit, default=0.5, metavar="RAD",
+                   help="failure when |θ| exceeds this, in rad (default 0.5)")
+    g.add_argument("--track-limit", type=_limit, default=None, metavar="M",
+                   help="failure when |p| reaches this, in m (default: the MJCF slider range, "
+                        "±2.4 m; beyond it only on a linear plant)")
+    g.add_argument("--force-limit", type=_limit, default=None, metavar="N",
+                   help="saturation |u| ≤ this, in N (default: the MJCF ctrlrange, ±10 N; "
+                        "beyond it only on a linear plant)")
+
+
+def add_theory_parser(sub: Any) -> None:
+    """The ``theory`` subcommand."""
+    p = sub.add_parser(
+        "theory", help="stationary closed loop of linear policies in closed form (no simulation)",
+        description="For each built-in linear policy on the linearised, discretised plant: the "
+                    "closed loop of plant and estimator under the scenario's noise, its "
+                    "eigenvalues and spectral radius, and from one discrete Lyapunov equation "
+                    "the stationary std of p, θ, ṗ, θ̇, u and of the estimation error, the cost "
+                    "rate and the J it implies. The limits are off in the theory; the verdict "
+                    "compares the spread with them.")
+    p.add_argument("policies", nargs="*", metavar="POLICY",
+                   help="built-in policies 'controller+observer' (default: the lecture study's "
+                        + ", ".join(LECTURE_POLICIES) + ")")
+    p.add_argument("--plant", choices=("linear-zoh", "linear-euler"), default="linear-zoh",
+                   help="the linear plant: exact ZOH of the linearisation, or the lecture's "
+                        "forward Euler at the control period (default linear-zoh)")
+    p.add_argument("--lti", default=None, metavar="FILE",
+                   help="a plant given as matrices (TOML or .npz, e.g. "
+                        "experiments/lti/double_integrator.toml) instead of the cart-pole; "
+                        "policies dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
+                        "dlqr+none, dlqr+kalman, dlqr+luenberger)")
+    p.add_argument("--noise-scale", type=_number, default=1.0,
+                   help="multiplies both noises' standard deviations (default 1)")
+    p.add_argument("--duration", type=_number, default=10.0,
+                   help="episode length in s for the implied J (default 10)")
+    p.add_argument("--json", action="store_true",
+                   help="machine-readable output: policies.NAME.{spectral_radius, stable, std, "
+                        "u_std, estimate_error_std, cost_rate, …}")
+    add_limit_options(p)
+    _add_design_options(p)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="pendulum-lqg",
                      description="LQG control of a MuJoCo cart-pole under noise: designs, noisy "
@@ -194,6 +251,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the episode --plot draws, 0 … --episodes − 1 (default 0, the first)")
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: configuration, summary and every episode row")
+    add_call_timeout(p)
+    add_limit_options(p)
     _add_design_options(p)
 
     p = sub.add_parser("bench", help="run an experiment grid (experiments/*.toml)",
@@ -264,6 +323,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also measure peak memory of 1000-episode benches of 2 s and 10 s")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     add_score_parsers(sub, _positive_int)
+    add_theory_parser(sub)
     return parser
 
 

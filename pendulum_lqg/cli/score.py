@@ -35,33 +35,58 @@ def add_parsers(sub: Any, positive_int: Any) -> None:
     p.add_argument("--nthread", type=positive_int, default=None,
                    help="physics threads of the batch path (default: the CPU cores, at most 8)")
     p.add_argument("--json", action="store_true", help="print the score file (JSON) instead")
-    p.add_argument("--out", default=None, metavar="FILE", help="also write the score file here")
+    p.add_argument("--out", default=None, metavar="FILE",
+                   help="also write the score file here (a new path or a regular file, replaced "
+                        "only once the score is complete)")
+    add_call_timeout(p)
 
     p = sub.add_parser("board", help="turn a folder of score files into a Markdown leaderboard",
                        description="Read the score files (*.json) of DIR and print one Markdown "
                                    "table: a row per entry, a column group per suite.")
     p.add_argument("dir", metavar="DIR", help="folder of score files (pendulum-lqg score --out)")
-    p.add_argument("--out", default=None, metavar="FILE", help="write the table to FILE too")
+    p.add_argument("--out", default=None, metavar="FILE",
+                   help="write the table to FILE too (a new path or a regular file)")
+
+
+def _seconds(text: str) -> float:
+    """argparse type: a finite number of seconds ≥ 0."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number of seconds ≥ 0, got {text!r}")
+    return value
+
+
+def add_call_timeout(p: argparse.ArgumentParser) -> None:
+    """``--call-timeout S``: the watchdog of user code (:mod:`pendulum_lqg.watchdog`)."""
+    p.add_argument("--call-timeout", type=_seconds, default=None, metavar="S",
+                   help="stop the run, naming the call, when one call into a plug-in or agent "
+                        "(factory, reset, act) has not returned after S seconds; 0: never "
+                        "(default 600)")
 
 
 def cmd_score(args: argparse.Namespace) -> int:
-    from pendulum_lqg.errors import ConfigError
-    from pendulum_lqg.files import atomic_write
+    from pendulum_lqg.files import atomic_write, output_file
+    from pendulum_lqg.progress import Progress
     from pendulum_lqg.scoreboard.score import score_entry
     from pendulum_lqg.scoreboard.suites import load_suite, suite_names
+    from pendulum_lqg.watchdog import call_timeout
 
+    out = None if args.out is None else output_file("--out", args.out, what="score (JSON)")
     wanted = args.suite or ["all"]
     names = suite_names() if "all" in wanted else wanted
     suites = [load_suite(n).with_episodes(args.episodes) for n in names]
-    out = Path(args.out) if args.out else None
-    if out is not None and out.is_dir():
-        raise ConfigError(f"--out: {out} is a folder; expected a file name for the score (JSON)")
-    doc = score_entry(suites, policy=args.policy, agent=args.agent,
-                      normalize_action=args.normalize_action, nthread=args.nthread,
-                      base_dir=Path.cwd())
+    with call_timeout(args.call_timeout), Progress("score", len(suites), unit="suites") as bar:
+        doc = score_entry(suites, policy=args.policy, agent=args.agent,
+                          normalize_action=args.normalize_action, nthread=args.nthread,
+                          base_dir=Path.cwd(),
+                          on_suite=lambda name: bar.advance(description=f"scored {name}"))
     text = json.dumps(doc, indent=1, allow_nan=False)
     if out is not None:
-        out.parent.mkdir(parents=True, exist_ok=True)
         atomic_write(out, text + "\n")
     if args.json:
         print(text)
@@ -95,13 +120,12 @@ def _print_score(doc: dict[str, Any]) -> None:
 
 
 def cmd_board(args: argparse.Namespace) -> int:
-    from pendulum_lqg.files import atomic_write
+    from pendulum_lqg.files import atomic_write, output_file
     from pendulum_lqg.scoreboard.board import make_board
 
-    table = make_board(Path(args.dir))
-    if args.out:
-        out = Path(args.out)
-        out.parent.mkdir(parents=True, exist_ok=True)
+    out = None if args.out is None else output_file("--out", args.out, what="board (Markdown)")
+    table = make_board(Path(args.dir), warn=lambda line: print(line, file=sys.stderr))
+    if out is not None:
         atomic_write(out, table)
     print(table, end="")
     return 0

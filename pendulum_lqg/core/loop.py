@@ -94,8 +94,7 @@ class Simulator:
         self.k = steps_per_period(plant, scenario.control_period)
         self.dt = self.k * self.h
         self.n_periods = scenario.n_periods
-        self.u_max = plant.u_max
-        self.track = plant.track_limit
+        _, self.track, self.u_max = rules.limits(plant, scenario)     # the limits in force
         self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h)
         # The cost weights h·[diag(Q), R]: a period's cost is Σ weights·z² over its physics steps.
         self.weights = rules.cost_weights(scenario.cost_Q, scenario.cost_R, self.h)

@@ -6,6 +6,8 @@ the native vector env — applies these functions and no other copy of them:
 =====================  =======================================================================
 rule                   function
 =====================  =======================================================================
+limits in force        :func:`limits` — ``θ_max``, the track and the force limit of a scenario on
+                       a plant (the scenario's, else the MJCF model's; ``inf``: switched off)
 saturation             :func:`saturate` — the requested force clipped to ``±u_max``
                        (the actuator's ``ctrlrange``)
 non-finite force       :func:`nonfinite_forces` — a nan/inf request ends its episode as
@@ -38,6 +40,8 @@ import numpy as np
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.period import PeriodView
+    from pendulum_lqg.core.scenario import Scenario
+    from pendulum_lqg.plant import Plant
 
 #: Any state component beyond this magnitude counts as divergence.
 RUNAWAY = 1e6
@@ -46,6 +50,32 @@ FAIL_NONE, FAIL_POLE, FAIL_TRACK, FAIL_DIVERGED = 0, 1, 2, 3
 #: Failure codes (int8 in the arrays) and the names the results use.
 FAIL_REASONS: dict[int, str] = {FAIL_NONE: "", FAIL_POLE: "pole_fell", FAIL_TRACK: "track_limit",
                                 FAIL_DIVERGED: "diverged"}
+
+
+# ---- limits -------------------------------------------------------------------------------------
+def limits(plant: Plant, scenario: Scenario) -> tuple[float, float, float]:
+    """``(theta_max, track_limit, u_max)`` in force for ``scenario`` on ``plant`` [rad, m, N].
+
+    The scenario's ``track_limit`` / ``force_limit`` when given, else the MJCF slider ``range`` and
+    actuator ``ctrlrange``; any of them may be ``inf`` (the rule switched off). MuJoCo itself stops
+    the cart at the slider's ``range`` and clips the force to ``ctrlrange``, so on the MuJoCo plant
+    a larger limit would be a rule the physics never lets fire: it is refused (one line naming
+    the limit); the linear plants take any.
+    """
+    from pendulum_lqg.errors import ConfigError
+
+    track = plant.track_limit if scenario.track_limit is None else scenario.track_limit
+    u_max = plant.u_max if scenario.force_limit is None else scenario.force_limit
+    if scenario.plant == "mujoco":
+        for name, value, model, where in (
+                ("track_limit", track, plant.track_limit, "slider range"),
+                ("force_limit", u_max, plant.u_max, "actuator ctrlrange (model override "
+                                                    "force_limit)")):
+            if value > model:
+                raise ConfigError(f"{name}: {value:g} is beyond the MuJoCo model's {where} "
+                                  f"±{model:g}; use a linear plant (plant = 'linear-zoh' or "
+                                  f"'linear-euler') or a model with a wider one")
+    return scenario.theta_max, track, u_max
 
 
 # ---- saturation ---------------------------------------------------------------------------------

@@ -13,7 +13,7 @@ from typing import Literal
 
 import numpy as np
 
-from pendulum_lqg._config import config_vector, positive_number
+from pendulum_lqg._config import config_vector, positive_limit, positive_number
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.limits import MAX_DELAY_PERIODS, check_control_period, check_duration
@@ -33,7 +33,14 @@ class Scenario:
     x0 : mean initial state ``[p, θ, ṗ, θ̇]``
     x0_std : standard deviation of the initial state around ``x0`` (drawn per episode)
     estimate0 : initial estimate, ``"zero"`` (x̂₀ = 0) or ``"true"`` (x̂₀ = x₀)
-    theta_max : failure when ``|θ|`` exceeds this [rad]
+    theta_max : failure when ``|θ|`` exceeds this [rad]; ``inf`` switches the rule off
+    track_limit : failure when ``|p|`` reaches this [m]; ``None`` (default) is the MJCF slider's
+        ``range``, ``inf`` switches the rule off (a linear plant only: MuJoCo's rail stops the cart
+        at its ``range``)
+    force_limit : the actuator's saturation ``|u| ≤ force_limit`` [N]; ``None`` (default) is the
+        MJCF ``ctrlrange``, ``inf`` switches saturation off (on MuJoCo only up to the model's
+        ``ctrlrange``: raise that with the model override ``force_limit``). The limits in force
+        are :func:`pendulum_lqg.core.rules.limits`
     settle_band : settling time is the last time ``|θ|`` was above this band [rad]
     cost_Q, cost_R : weights of ``J = ∫ xᵀ diag(Q) x + R u² dt``
     overrides : model changes of the *simulated* plant (mismatch studies); designs use the
@@ -64,6 +71,8 @@ class Scenario:
     x0_std: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)
     estimate0: Literal["zero", "true"] = "zero"
     theta_max: float = 0.5
+    track_limit: float | None = None
+    force_limit: float | None = None
     settle_band: float = 0.02
     cost_Q: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
     cost_R: float = 1.0
@@ -77,8 +86,12 @@ class Scenario:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "control_period", check_control_period(self.control_period))
-        for name in ("duration", "theta_max", "settle_band", "cost_R"):
+        for name in ("duration", "settle_band", "cost_R"):
             object.__setattr__(self, name, positive_number(name, getattr(self, name)))
+        object.__setattr__(self, "theta_max", positive_limit("theta_max", self.theta_max))
+        for name in ("track_limit", "force_limit"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, positive_limit(name, getattr(self, name)))
         check_duration(self.duration, self.control_period)     # at most MAX_PERIODS periods
         object.__setattr__(self, "x0", config_vector("x0", self.x0, 4))
         object.__setattr__(self, "x0_std", config_vector("x0_std", self.x0_std, 4, nonneg=True))
@@ -144,5 +157,8 @@ class Scenario:
         d = dataclasses.asdict(self)
         d["overrides"] = {k: v for k, v in d["overrides"].items() if v is not None}
         d["randomize"] = {k: list(v) for k, v in d["randomize"].items() if v is not None}
+        for name in ("theta_max", "track_limit", "force_limit"):   # a switched-off limit: "inf"
+            if d[name] == float("inf"):                              # (JSON has no ∞; null is
+                d[name] = "inf"                                      # "the model's" limit)
         return d
 

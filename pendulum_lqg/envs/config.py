@@ -75,6 +75,7 @@ class EnvConfig:
               measurement_variance: float | Sequence[float] = LECTURE_V,
               x0: Sequence[float] = (0.0, 0.1, 0.0, 0.0),
               x0_std: Sequence[float] = (0.0, 0.0, 0.0, 0.0), theta_max: float = 0.5,
+              track_limit: float | None = None, force_limit: float | None = None,
               cost_Q: Sequence[float] = (1.0, 1.0, 1.0, 1.0), cost_R: float = 1.0,
               reward_scale: float = DEFAULT_REWARD_SCALE,
               model_overrides: Mapping[str, float] | ModelOverrides | None = None,
@@ -113,6 +114,7 @@ class EnvConfig:
             raise ConfigError(f"model_path: expected a path string, got {model_path!r}")
         scenario = Scenario(control_period=control_period, duration=duration, noise=noise,
                             x0=x0, x0_std=x0_std, theta_max=theta_max,  # type: ignore[arg-type]
+                            track_limit=track_limit, force_limit=force_limit,
                             cost_Q=cost_Q, cost_R=cost_R, overrides=overrides,  # type: ignore[arg-type]
                             plant=plant,
                             measurement_delay=measurement_delay, actuator_delay=actuator_delay,
@@ -190,16 +192,20 @@ def _short(value: object) -> str:
 class Actions:
     """The action space and the map from actions to requested forces [N].
 
-    ``normalize_action=False``: the action is the force, ``Box(lo, hi)`` from the actuator's
-    ``ctrlrange``; ``True``: an action in ``[−1, 1]`` maps linearly onto ``[lo, hi]``. Either
+    ``normalize_action=False``: the action is the force, ``Box(lo, hi)`` from the force limit in
+    force (the scenario's ``force_limit``, else the actuator's ``ctrlrange``; unbounded for
+    ``inf``), ``u_max`` [N]; ``True``: an action in ``[−1, 1]`` maps linearly onto ``[lo, hi]``. Either
     way the core saturates the force to ``[lo, hi]``.
     """
 
-    def __init__(self, plant: Plant, normalize: object) -> None:
+    def __init__(self, u_max: float, normalize: object) -> None:
         if not isinstance(normalize, bool):
             raise ConfigError(f"normalize_action: expected True or False, got {normalize!r}")
+        if normalize and not math.isfinite(u_max):
+            raise ConfigError("normalize_action: needs a finite force_limit (an action in [−1, 1] "
+                              "maps onto [−force_limit, force_limit])")
         self.normalize = normalize
-        self.lo, self.hi = plant.force_limit
+        self.lo, self.hi = -u_max, u_max
         bound = (-1.0, 1.0) if normalize else (self.lo, self.hi)
         self.space = spaces.Box(np.float32(bound[0]), np.float32(bound[1]), shape=(1,),
                                 dtype=np.float32)

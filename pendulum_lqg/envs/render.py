@@ -70,7 +70,9 @@ def make_renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Rend
 def image_size(plant: Plant, width: int, height: int) -> tuple[int, int]:
     width, height = positive_int("width", width), positive_int("height", height)
     vis = plant.model.vis.global_
-    if width > vis.offwidth or height > vis.offheight:
-        raise ConfigError(f"width: {width}×{height} exceeds the model's offscreen buffer "
-                          f"{vis.offwidth}×{vis.offheight} (<visual><global offwidth/offheight>)")
+    for name, value, limit, attr in (("width", width, vis.offwidth, "offwidth"),
+                                     ("height", height, vis.offheight, "offheight")):
+        if value > limit:           # name the one that is too large (both: the width first)
+            raise ConfigError(f"{name}: at most {limit} pixels (the model's offscreen buffer, "
+                              f"<visual><global {attr}>), got {value}")
     return width, height

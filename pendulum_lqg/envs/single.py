@@ -107,7 +107,9 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     | `process_density`      | float or list        | `4e-4` (×4)   | spectral density W (units²·s) [2] |
     | `measurement_variance` | float or list of 2   | `0.01`        | per-sample V of `[p, θ]` (m², rad²) |
     | `x0`, `x0_std`         | 4 floats each        | see above     | initial-state mean / std dev      |
-    | `theta_max`            | float (rad)          | `0.5`         | failure angle                     |
+    | `theta_max`            | float (rad)          | `0.5`         | failure angle (`inf`: none)       |
+    | `track_limit`          | float (m) or None    | `None`        | track end (None: the MJCF's) [8]  |
+    | `force_limit`          | float (N) or None    | `None`        | saturation (None: `ctrlrange`) [8] |
     | `cost_Q`, `cost_R`     | 4 floats, float      | `1`, `1`      | weights of the cost J             |
     | `reward_scale`         | float (J/s)          | `10.0`        | see Rewards                       |
     | `model_overrides`      | mapping              | `None`        | simulated-plant changes [3]       |
@@ -134,6 +136,8 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     benchmark's episode (see `pendulum_lqg.core.scenario.Scenario`).
     [7] the MJCF model's linearisation stepped instead of MuJoCo: exact ZOH, or the lecture's
     forward Euler at the control period (`pendulum_lqg.core.scenario.Scenario.plant`).
+    [8] `inf` switches the limit off (the lecture's unbounded linear loop); on MuJoCo at most the
+    model's slider `range` and `ctrlrange` (`pendulum_lqg.core.rules.limits`).
 
     Invalid values raise `pendulum_lqg.errors.ConfigError` naming the parameter.
 
@@ -158,7 +162,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         self.observation_mode = self.config.observation_mode
         self.plant, self._sim = self.config.make_simulator(nthread=0)
         self.width, self.height = image_size(self.plant, width, height)
-        self._actions = Actions(self.plant, normalize_action)
+        self._actions = Actions(self._sim.u_max, normalize_action)
         self._frames = Frames(self.plant, self.width, self.height)
         #: control period T [s] and physics steps per env step
         self.dt, self.frame_skip = self._sim.dt, self._sim.k

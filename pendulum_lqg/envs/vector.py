@@ -95,7 +95,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
         self._scale_dt = self.config.reward_scale * self.dt
         self.metadata = {**type(self).metadata, "render_fps": round(1.0 / self.dt),
                          "autoreset_mode": self.autoreset_mode}
-        self._actions = Actions(self.plant, normalize_action)
+        self._actions = Actions(self._sim.u_max, normalize_action)
         self.single_action_space = self._actions.space
         dim = 2 if self.observation_mode == "measurement" else 4
         self.single_observation_space = spaces.Box(-np.inf, np.inf, shape=(dim,),

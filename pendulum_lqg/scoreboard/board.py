@@ -9,35 +9,46 @@ under "Not comparable" instead of in the table.
 
 from __future__ import annotations
 
-import json
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from pendulum_lqg.boundary.schemas import SCORE_VERSION, score_file
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.scoreboard.score import SCORE_VERSION
 from pendulum_lqg.scoreboard.suites import SUITE_ORDER
 
 
-def read_scores(folder: Path) -> list[tuple[Path, dict[str, Any]]]:
-    """The score files (``*.json``) of ``folder``, checked for the keys the board reads."""
+def read_scores(folder: Path, *, skipped: list[str] | None = None,
+                ) -> list[tuple[Path, dict[str, Any]]]:
+    """The score files (``*.json``) of ``folder``, each checked by
+    :func:`~pendulum_lqg.boundary.schemas.score_file` for every key the board reads.
+
+    A damaged file — not a regular file, not JSON, nested too deep, a key missing or of the wrong
+    type — is skipped: one line naming it and the key is appended to ``skipped`` (or, without
+    ``skipped``, it is a :class:`ConfigError`), so one bad file does not stop the board. A folder
+    with no good score file is a :class:`ConfigError`."""
     folder = Path(folder)
     if not folder.is_dir():
         raise ConfigError(f"board: {folder} is not a folder of score files")
     out = []
     for path in sorted(folder.glob("*.json")):
         try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            raise ConfigError(f"board: {path} is not a readable score file ({exc})") from exc
-        if not isinstance(data, dict) or data.get("score_version") != SCORE_VERSION \
-                or not isinstance(data.get("suites"), dict) or not isinstance(data.get("policy"), str):
-            raise ConfigError(f"board: {path} is not a score file of version {SCORE_VERSION} "
-                              "(keys policy, score_version, suites)")
-        out.append((path, data))
+            out.append((path, score_file(path)))
+        except ConfigError as exc:
+            if skipped is None:
+                raise
+            why = str(exc).removeprefix(f"board: {path}").lstrip(": ")
+            skipped.append(f"skipped {path.name}: {why}")
     if not out:
-        raise ConfigError(f"board: {folder} holds no score files (*.json)")
+        raise ConfigError(f"board: {folder} holds no readable score file of version "
+                          f"{SCORE_VERSION} (*.json)" + (f"; {skipped[0]}" if skipped else ""))
     return out
+
+
+def _md(text: object) -> str:
+    """``text`` safe in a Markdown table cell (one line, no column separator)."""
+    return " ".join(str(text).split()).replace("|", "\\|")
 
 
 def _pct(value: Any) -> str:
@@ -57,18 +68,23 @@ def _gap(entry: dict[str, Any]) -> str:
     return f"{gap:+.2f}{ci}"
 
 
-def make_board(folder: Path) -> str:
-    """The Markdown board of the score files in ``folder``."""
-    scores = read_scores(folder)
+def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> str:
+    """The Markdown board of the score files in ``folder``. Damaged files are skipped and listed
+    under the table (and each reported to ``warn``, one line; see :func:`read_scores`)."""
+    skipped: list[str] = []
+    scores = read_scores(folder, skipped=skipped)
+    for line in skipped:
+        if warn is not None:
+            warn(f"board: {line}")
     names = {n for _, d in scores for n in d["suites"]}
     suites = [n for n in SUITE_ORDER if n in names] + sorted(names - set(SUITE_ORDER))
     prints = {s: Counter(d["suites"][s]["fingerprint"] for _, d in scores if s in d["suites"])
               .most_common(1)[0][0] for s in suites}
-    head = ["entry", "kind"] + [f"{s}: {c}" for s in suites for c in ("success", "J", "gap")]
+    head = ["entry", "kind"] + [f"{_md(s)}: {c}" for s in suites for c in ("success", "J", "gap")]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     stale: list[str] = []
     for path, d in sorted(scores, key=lambda item: item[1]["policy"]):
-        cells = [f"`{d['policy']}`", str(d.get("kind", ""))]
+        cells = [f"`{_md(d['policy'])}`", _md(d["kind"])]
         for s in suites:
             e = d["suites"].get(s)
             if e is not None and not e.get("applicable", True):
@@ -105,4 +121,7 @@ def make_board(folder: Path) -> str:
     if stale:
         lines += ["", "Not comparable (another suite version or episode count): "
                   + "; ".join(stale) + "."]
+    if skipped:
+        lines += ["", "Skipped (damaged score files): " + "; ".join(
+            line.removeprefix("skipped ") for line in skipped) + "."]
     return "\n".join(lines) + "\n"

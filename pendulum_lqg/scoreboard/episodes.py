@@ -27,7 +27,7 @@ from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.seeding import episode_seeds
 from pendulum_lqg.errors import ConfigError, NotApplicable, PluginError
 from pendulum_lqg.plant import load_plant
-from pendulum_lqg.plugins import build_policy, is_plugin_ref, load_factory
+from pendulum_lqg.plugins import build_policy, guard, is_plugin_ref, load_factory
 from pendulum_lqg.scoreboard.suites import Suite
 
 #: The fields of a scored episode row.
@@ -98,30 +98,22 @@ def agent_rows(suite: Suite, factory: AgentFactory, *, name: str = "agent",
     """The rows of a Gymnasium agent on the suite: ``env.reset(seed=episode_seed(seed, k))``,
     ``agent.reset()``, then ``env.step(agent.act(obs))`` until the episode ends."""
     env = make_env(suite, normalize_action=normalize_action)
-    try:
-        agent = factory(env)
-    except (PluginError, ConfigError):          # NotApplicable among them: the agent declines
-        raise
-    except Exception as exc:
-        raise PluginError(f"agent {name!r}: the factory raised {type(exc).__name__}: "
-                          f"{' '.join(str(exc).split())}") from exc
+    label = f"agent {name!r}"
+    agent = guard(label, "the factory", factory, env, passing=(NotApplicable,))
     for member in ("reset", "act"):
-        if not callable(getattr(agent, member, None)):
-            raise PluginError(f"agent {name!r}: the factory returned {type(agent).__name__}, "
+        if not callable(guard(label, f"reading {member}", getattr, agent, member, None)):
+            raise PluginError(f"{label}: the factory returned {type(agent).__name__}, "
                               f"which has no {member}() method (expected reset() and act(obs))")
+    def act(observation: np.ndarray) -> np.ndarray:      # the action converted: __array__ is theirs
+        return np.asarray(agent.act(observation))
+
     rows = []
     for k, seed in enumerate(episode_seeds(suite.seed, range(suite.episodes))):
         obs, info = env.reset(seed=seed)
-        agent.reset()
+        guard(label, "reset", agent.reset)
         terminated = truncated = False
         while not (terminated or truncated):
-            try:
-                action = agent.act(obs)
-            except (PluginError, ConfigError):
-                raise
-            except Exception as exc:
-                raise PluginError(f"agent {name!r}: act raised {type(exc).__name__}: "
-                                  f"{' '.join(str(exc).split())[:200]}") from exc
+            action = guard(label, "act", act, obs)
             obs, _, terminated, truncated, info = env.step(action)
         rows.append({"episode": k, "seed": seed, "success": not terminated,
                      "failure_reason": info["failure_reason"],

@@ -21,19 +21,14 @@ Nothing here imports torch until a model is loaded.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
+from pendulum_lqg.boundary.schemas import ALGORITHMS, training_record
 from pendulum_lqg.errors import ConfigError, NotApplicable, PluginError
-
-#: The algorithms a model file may name, and the package each comes from.
-ALGORITHMS = {"PPO": "stable_baselines3", "SAC": "stable_baselines3", "TD3": "stable_baselines3",
-              "A2C": "stable_baselines3", "DDPG": "stable_baselines3",
-              "RecurrentPPO": "sb3_contrib", "TQC": "sb3_contrib"}
 
 
 class SB3Agent:
@@ -82,19 +77,12 @@ class SB3Agent:
 
 
 def read_metadata(path: Path) -> dict[str, Any]:
-    """The training record beside a model zip (``PATH.json``)."""
+    """The training record beside a model zip (``PATH.json``), checked by
+    :func:`~pendulum_lqg.boundary.schemas.training_record` (one line naming the file and key)."""
     meta_path = path.with_suffix(".json")
-    try:
-        meta = json.loads(meta_path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ConfigError(f"agent: sb3:{path} needs its training record {meta_path} "
-                          f"({exc.strerror or exc})") from exc
-    except ValueError as exc:
-        raise ConfigError(f"agent: {meta_path} is not valid JSON ({exc})") from exc
-    if not isinstance(meta, dict) or meta.get("algo") not in ALGORITHMS:
-        raise ConfigError(f"agent: {meta_path}: algo: expected one of {', '.join(ALGORITHMS)}, "
-                          f"got {meta.get('algo') if isinstance(meta, dict) else meta!r}")
-    return meta
+    if not meta_path.exists():
+        raise ConfigError(f"agent: sb3:{path} needs its training record {meta_path} (no such file)")
+    return training_record(meta_path, where_text="agent")
 
 
 def load_model(path: Path, algo: str) -> Any:
@@ -122,16 +110,15 @@ def sb3_agent(path_text: str) -> Any:
     meta = read_metadata(path)
     model = load_model(path, meta["algo"])
 
-    trained_on = meta.get("env", {}).get("observation_mode", "measurement")
+    trained_on = meta["env"].get("observation_mode", "measurement")
 
     def factory(env: gym.Env) -> SB3Agent:
         mode = getattr(env.unwrapped, "observation_mode", None)
         if mode != trained_on:
             raise NotApplicable(f"agent sb3:{path_text} was trained on observation_mode = "
                                 f"{trained_on!r}; this suite's env has {mode!r}")
-        return SB3Agent(model, frame_stack=int(meta.get("frame_stack", 1)),
-                        obs_norm=meta.get("obs_norm"))
+        return SB3Agent(model, frame_stack=meta["frame_stack"], obs_norm=meta["obs_norm"])
 
-    factory.normalize_action = bool(meta.get("normalize_action", False))   # type: ignore[attr-defined]
-    factory.env = dict(meta.get("env", {}))                                # type: ignore[attr-defined]
+    factory.normalize_action = meta["normalize_action"]     # type: ignore[attr-defined]
+    factory.env = dict(meta["env"])                         # type: ignore[attr-defined]
     return factory

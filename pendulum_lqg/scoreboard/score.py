@@ -29,12 +29,13 @@ from typing import Any
 
 import numpy as np
 
+from pendulum_lqg.boundary.schemas import SCORE_VERSION
 from pendulum_lqg.core.metrics import mean_se, wilson_interval
-from pendulum_lqg.errors import NotApplicable
+from pendulum_lqg.errors import NotApplicable, PendulumLQGError
 from pendulum_lqg.scoreboard.suites import Suite
 
-#: Version of the score files' layout.
-SCORE_VERSION = 1
+__all__ = ["SCORE_VERSION", "optimality_gap", "score_document", "score_entry", "success_figures",
+           "suite_score"]
 #: Paired bootstrap resamples of the gap's interval, and their seed.
 BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED = 2000, 0
 #: The full-state LQR whose figures bound what observation costs.
@@ -91,23 +92,34 @@ def score_document(policy: str, kind: str, suites: Sequence[Suite],
                    rows_of: Callable[[Suite], list[dict[str, Any]]],
                    reference_of: Callable[[Suite], list[dict[str, Any]]],
                    bound_of: Callable[[Suite], list[dict[str, Any]]],
-                   versions: dict[str, str]) -> dict[str, Any]:
+                   versions: dict[str, str],
+                   on_suite: Callable[[str], None] | None = None) -> dict[str, Any]:
     """The score file of ``policy``: ``{"policy", "kind", "score_version", "versions", "suites":
     {name: {"applicable", "episodes", "success_rate", "success_ci", "cost_mean", "cost_se",
     "optimality_gap", "gap_ci", "gap_episodes", "reference", "full_state_bound", "version",
     "fingerprint", "rows"}}}``; a suite the entry cannot play as posed
     (:class:`~pendulum_lqg.scoreboard.episodes.NotApplicable`) has ``"applicable": false`` and the
-    ``"reason"`` instead of the figures. ``kind`` is ``"builtin"``, ``"plugin"`` or ``"agent"``."""
+    ``"reason"`` instead of the figures. ``kind`` is ``"builtin"``, ``"plugin"`` or ``"agent"``;
+    ``on_suite(name)`` is told when each suite is done (progress)."""
     entries: dict[str, Any] = {}
     for s in suites:
+        # the suite's own rows first: an error there (its model file, a reference its [env]
+        # cannot design) names the suite's file, not the entry scored on it
+        try:
+            reference_of(s)
+            bound_of(s)
+        except PendulumLQGError as exc:
+            raise s.errors_named(f"its reference {s.reference!r}", exc) from None
         try:
             rows = rows_of(s)
         except NotApplicable as exc:        # a row that says why, not a number
             entries[s.name] = {"applicable": False, "reason": str(exc), "episodes": s.episodes,
                                "version": s.version, "fingerprint": s.fingerprint()}
-            continue
-        entries[s.name] = {"applicable": True,
-                           **suite_score(s, rows, reference_of(s), bound_of(s))}
+        else:
+            entries[s.name] = {"applicable": True,
+                               **suite_score(s, rows, reference_of(s), bound_of(s))}
+        if on_suite is not None:
+            on_suite(s.name)
     return {"policy": policy, "kind": kind, "score_version": SCORE_VERSION, "versions": versions,
             "suites": entries}
 
@@ -116,15 +128,15 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
                 normalize_action: bool = False, nthread: int | None = None,
                 base_dir: Path | None = None,
                 cache: dict[tuple[str, str, str], list[dict[str, Any]]] | None = None,
-                ) -> dict[str, Any]:
+                on_suite: Callable[[str], None] | None = None) -> dict[str, Any]:
     """The score file of one entry — a built-in or plug-in ``policy`` (the batch path), or a
     Gymnasium ``agent`` reference (the env path) — on ``suites``: what ``pendulum-lqg score``
     writes. ``cache`` (suite fingerprint, kind, policy) → rows keeps the references' and the
     full-state bounds' rows between entries (the leaderboard scores many entries at once; the
-    rows are the same ones either way)."""
+    rows are the same ones either way); ``on_suite(name)`` is told when a suite is done."""
     from pendulum_lqg.bench.results import versions
     from pendulum_lqg.errors import ConfigError
-    from pendulum_lqg.plugins import is_plugin_ref
+    from pendulum_lqg.plugins import guard, is_plugin_ref
     from pendulum_lqg.scoreboard import episodes as ep
 
     if (policy is None) == (agent is None):
@@ -149,7 +161,9 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
     rows_of: Callable[[Suite], list[dict[str, Any]]]
     if agent is not None:
         factory = ep.load_agent(agent, base_dir=base_dir)
-        normalized = normalize_action or bool(getattr(factory, "normalize_action", False))
+        normalized = normalize_action or guard(
+            f"agent {agent!r}", "reading normalize_action",
+            lambda: bool(getattr(factory, "normalize_action", False)))
         name, kind = agent, "agent"
 
         def rows_of(s: Suite) -> list[dict[str, Any]]:
@@ -166,7 +180,8 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
                 return reference_of(s)
             return ep.policy_rows(s, policy, base_dir=base_dir, nthread=nthread)
 
-    return score_document(name, kind, suites, rows_of, reference_of, bound_of, versions())
+    return score_document(name, kind, suites, rows_of, reference_of, bound_of, versions(),
+                          on_suite)
 
 
 def _finite(value: float) -> float | None:

@@ -22,13 +22,16 @@ from __future__ import annotations
 
 import hashlib
 import json
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from pendulum_lqg.boundary import read_toml
+from pendulum_lqg.boundary.fields import Invalid, Where, integer, table, text
 from pendulum_lqg.envs.config import EnvConfig
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
+from pendulum_lqg.limits import MAX_SCORE_EPISODES
+from pendulum_lqg.names import CONTROLLERS, OBSERVERS
 from pendulum_lqg.plant import Plant, load_plant
 from pendulum_lqg.resources import data_dir
 
@@ -49,6 +52,7 @@ class Suite:
     reference : the built-in policy (``"controller+observer"``) the optimality gap is taken to
     episodes, seed : episode ``k`` (0 ≤ k < episodes) is seeded ``episode_seed(seed, k)``
     env : the Gymnasium env keywords that define the scenario
+    origin : where the suite was read (its file), named by the errors found when it is played
     config : the validated :class:`~pendulum_lqg.envs.config.EnvConfig` of ``env``
     """
 
@@ -59,6 +63,7 @@ class Suite:
     episodes: int
     seed: int
     env: dict[str, Any] = field(default_factory=dict)
+    origin: str = field(default="", compare=False)
     config: EnvConfig = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -78,19 +83,31 @@ class Suite:
         if episodes is None:
             return self
         return Suite(self.name, self.version, self.purpose, self.reference,
-                     _positive_int(f"suite {self.name!r}: episodes", episodes), self.seed,
-                     dict(self.env))
+                     _episodes(f"suite {self.name!r}: episodes", episodes), self.seed,
+                     dict(self.env), origin=self.origin)
+
+    def errors_named(self, what: str, exc: PendulumLQGError) -> PendulumLQGError:
+        """``exc`` found while playing ``what`` of the suite, as one line naming the suite's file
+        (an error in the suite must not read as one in the entry scored on it)."""
+        where = self.origin or f"suite {self.name!r}"
+        return exc if str(exc).startswith(where) else type(exc)(f"{where}: {what}: {exc}")
 
     def plants(self) -> tuple[Plant, Plant]:
         """``(simulated, nominal)`` plants: the simulated one with the scenario's overrides, the
         nominal one (the MJCF as it is) for the designs."""
         path = self.config.model_path
-        return load_plant(path, overrides=self.config.scenario.overrides), load_plant(path)
+        try:
+            return load_plant(path, overrides=self.config.scenario.overrides), load_plant(path)
+        except PendulumLQGError as exc:
+            raise self.errors_named("env.model_path", exc) from None
 
     def fingerprint(self) -> str:
         """sha256 of everything that decides the episodes: the definition, the scenario it makes and
         the model file's bytes. Two scores are comparable only when their fingerprints match."""
-        model = load_plant(self.config.model_path).path
+        try:
+            model = load_plant(self.config.model_path).path
+        except PendulumLQGError as exc:
+            raise self.errors_named("env.model_path", exc) from None
         blob = json.dumps({"name": self.name, "version": self.version, "episodes": self.episodes,
                            "seed": self.seed, "reference": self.reference,
                            "scenario": self.config.scenario.to_dict(),
@@ -105,39 +122,45 @@ class Suite:
                 "env": dict(self.env)}
 
 
-def _positive_int(where: str, value: object) -> int:
+def _episodes(where: str, value: object) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < 1:
         raise ConfigError(f"{where}: expected a positive integer, got {value!r}")
+    if value > MAX_SCORE_EPISODES:
+        raise ConfigError(f"{where}: at most {MAX_SCORE_EPISODES:,} (the rows of the entry, its "
+                          f"reference and the full-state bound are kept in memory), got {value:,}")
     return value
 
 
+def _reference(value: object) -> str:
+    """A built-in ``controller+observer`` (the suite's reference is designed, never a plug-in)."""
+    name = text(value)
+    controller, _, observer = name.partition("+")
+    if controller not in CONTROLLERS or observer not in OBSERVERS:
+        raise Invalid(f"a built-in 'controller+observer' (controllers {', '.join(CONTROLLERS)}; "
+                      f"observers {', '.join(OBSERVERS)})")
+    return name
+
+
 def parse_suite(data: dict[str, Any], *, path: str = "suite") -> Suite:
-    """A :class:`Suite` from the parsed TOML ``data`` (errors name ``path`` and the key)."""
+    """A :class:`Suite` from the parsed TOML ``data``; errors are one line naming ``path`` and the
+    key (``my.toml: reference: expected …``)."""
+    where = Where(path)
+    data = where.check(data, table)
     unknown = sorted(set(data) - set(SUITE_KEYS))
     if unknown:
-        raise ConfigError(f"{path}: unknown key {unknown[0]!r}; known: {', '.join(SUITE_KEYS)}")
-    missing = [k for k in SUITE_KEYS if k not in data and k != "env"]
-    if missing:
-        raise ConfigError(f"{path}: key {missing[0]!r} is missing")
-    for key in ("name", "purpose", "reference"):
-        if not isinstance(data[key], str) or not data[key]:
-            raise ConfigError(f"{path}: {key}: expected a non-empty string, got {data[key]!r}")
-    if "+" not in data["reference"]:
-        raise ConfigError(f"{path}: reference: expected a built-in 'controller+observer', got "
-                          f"{data['reference']!r}")
-    env = data.get("env", {})
-    if not isinstance(env, dict):
-        raise ConfigError(f"{path}: env: expected a table of env keywords, got {env!r}")
-    seed = data["seed"]
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ConfigError(f"{path}: seed: expected a non-negative integer, got {seed!r}")
+        raise where.error(f"unknown key {unknown[0]!r}; known: {', '.join(SUITE_KEYS)}")
+    fields = {"name": where.get(data, "name", text), "purpose": where.get(data, "purpose", text),
+              "reference": where.get(data, "reference", _reference),
+              "version": where.get(data, "version", integer(1)),
+              "seed": where.get(data, "seed", integer(0)),
+              "env": dict(where.get(data, "env", table, default={}))}
+    if "episodes" not in data:
+        raise where.error("missing", "episodes")
     try:
-        return Suite(name=data["name"], version=_positive_int(f"{path}: version", data["version"]),
-                     purpose=data["purpose"], reference=data["reference"],
-                     episodes=_positive_int(f"{path}: episodes", data["episodes"]), seed=seed,
-                     env=dict(env))
+        episodes = _episodes(where.label("episodes"), data["episodes"])
+        return Suite(episodes=episodes, origin=path, **fields)
     except PendulumLQGError as exc:
-        raise type(exc)(f"{exc} (in {path})") from exc
+        raise type(exc)(f"{exc} (in {path})" if path not in str(exc) else str(exc)) from None
 
 
 def suites_dir() -> Path:
@@ -152,20 +175,15 @@ def suite_names() -> list[str]:
 
 
 def load_suite(name_or_path: str) -> Suite:
-    """A shipped suite by name (``lecture``) or a suite file by path."""
+    """A shipped suite by name (``lecture``) or a suite file by path (a regular file, read through
+    :mod:`pendulum_lqg.boundary`)."""
     path = Path(name_or_path)
     if not path.suffix and len(path.parts) == 1:
         path = suites_dir() / f"{name_or_path}.toml"
         if not path.is_file():
             raise ConfigError(f"suite: no suite {name_or_path!r}; shipped: "
                               + ", ".join(suite_names()))
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"suite: cannot read {path}: {exc}") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"suite: {path} is not valid TOML: {' '.join(str(exc).split())}") from exc
-    suite = parse_suite(data, path=str(path))
+    suite = parse_suite(read_toml(path, where="suite"), path=str(path))
     if path.parent == suites_dir() and suite.name != path.stem:
         raise ConfigError(f"suite: {path} names itself {suite.name!r}; a shipped suite's name is "
                           "its file name")

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 import subprocess
 import sys
 from pathlib import Path
@@ -148,7 +150,7 @@ def test_run_plot_episode_k_writes_an_svg(tmp_path, capsys):
     (["--plot", "ep.gif"], "--plot: expected a file name ending in .png, .svg, .pdf"),
     (["--plot", "ep.png", "--plot-episode", "1"], "--plot-episode: expected an episode of this run"),
     (["--plot-episode", "1"], "--plot-episode: needs --plot FILE"),
-    (["--plot", "no/such/folder/ep.png"], "--plot: the folder no/such/folder does not exist"),
+    (["--plot", ""], "--plot: expected a file name ending in .png"),
 ])
 def test_bad_plot_options_exit_2_with_one_line(tmp_path, capsys, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)
@@ -156,6 +158,24 @@ def test_bad_plot_options_exit_2_with_one_line(tmp_path, capsys, monkeypatch, ar
     err = capsys.readouterr().err.strip()
     assert message in err and "\n" not in err, err
     assert not list(tmp_path.iterdir())
+
+
+def test_plot_refuses_a_folder_or_a_fifo_before_running(tmp_path, capsys):
+    # the picture's target is checked like every output: only a new path or a regular file
+    (tmp_path / "dir.png").mkdir()
+    os.mkfifo(tmp_path / "fifo.png")
+    for name in ("dir.png", "fifo.png"):
+        assert main(["run", "--episodes", "1", "--duration", "0.1",
+                     "--plot", str(tmp_path / name)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("error: --plot:") and "\n" not in err, err
+    assert (tmp_path / "dir.png").is_dir() and stat.S_ISFIFO((tmp_path / "fifo.png").stat().st_mode)
+
+
+def test_plot_creates_its_folder(tmp_path):
+    out = tmp_path / "new" / "folder" / "ep.png"
+    assert main(["run", "--episodes", "1", "--duration", "0.2", "--plot", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_no_module_of_the_package_uses_pyplot():

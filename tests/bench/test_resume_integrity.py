@@ -183,11 +183,16 @@ def test_an_edited_episode_column_with_a_recomputed_hash_is_recomputed(tmp_path,
 
 
 @pytest.mark.parametrize(("text", "why"), [
-    ("[" * 100_000 + "]" * 100_000, "check record corrupt (not JSON: RecursionError)"),
-    ("{not json", "check record corrupt (not JSON: JSONDecodeError)"),
-    ("[1, 2]", "check record corrupt (a JSON list, expected an object)"),
-    ('{"fingerprint": 5}', "check record corrupt (fingerprint: expected a str, got int)"),
-    ("RECORD_WITH_NESTED_COLUMNS", "check record corrupt (columns: expected a list of names)"),
+    ("[" * 100_000 + "]" * 100_000,
+     "check record corrupt (is nested deeper than 64 levels (the ceiling of tables and lists in a "
+     "file))"),
+    ("{not json", "check record corrupt (is not valid JSON (Expecting property name enclosed in "
+                  "double quotes at line 1, column 2))"),
+    ("[1, 2]", "check record corrupt (expected a table (JSON object), got [1, 2])"),
+    ('{"fingerprint": 5}', "check record corrupt (fingerprint: expected a non-empty string, got 5)"),
+    ("RECORD_WITH_NESTED_COLUMNS",
+     "check record corrupt (columns: expected a list whose items are each a string, got "
+     "[[['config']], [['config']], [['config']]])"),
 ])
 def test_a_corrupt_check_record_is_recomputed_however_deep_it_nests(tmp_path, capsys, text, why):
     spec = _setup(tmp_path, policies='["dlqr+kalman"]')

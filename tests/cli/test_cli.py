@@ -246,14 +246,18 @@ def test_results_are_byte_identical_for_any_thread_count(tmp_path):
 
 
 def test_a_second_run_into_a_busy_folder_is_refused(tmp_path, capsys):
+    from pendulum_lqg.files import FileLock
+
     out = tmp_path / "out"
     out.mkdir()
-    (out / ".lock").write_text(str(os.getpid()))          # a live writer
+    writer = FileLock(out / ".lock", where="out")         # a live writer holds the folder's lock
+    writer.acquire()
     spec = tmp_path / "small.toml"
     spec.write_text(SMALL)
     assert main(["bench", str(spec), "--out", str(out), "--resume", "--quiet"]) == 2
-    assert "is being written by another run" in capsys.readouterr().err
-    (out / ".lock").write_text("999999999")                # a dead writer's stale lock
+    assert f"is being written by another run (pid {os.getpid()})" in capsys.readouterr().err
+    writer.release()
+    (out / ".lock").write_text("999999999")                # an old version's PID file: no lock
     assert main(["bench", str(spec), "--out", str(out), "--resume", "--quiet"]) == 0
     assert not (out / ".lock").exists()
 
@@ -281,7 +285,8 @@ def test_every_subcommand_and_option_has_help():
 
     parser = build_parser()
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-    assert set(sub.choices) == {"design", "run", "bench", "report", "perf", "score", "board"}
+    assert set(sub.choices) == {"design", "run", "bench", "report", "perf", "score", "board",
+                                "theory"}
     for name, p in sub.choices.items():
         assert p.description, f"{name} has no description"
         for action in p._actions:

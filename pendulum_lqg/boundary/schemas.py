@@ -1,0 +1,132 @@
+"""One schema per external JSON format: score files (``board``), stable-baselines3 training records
+(``--agent sb3:PATH.zip``) and the check records of a results folder's work units. Suite files are checked by
+:func:`pendulum_lqg.scoreboard.suites.parse_suite` and experiment files by
+:func:`pendulum_lqg.bench.experiments.parse_spec`, with the same validators
+(:mod:`pendulum_lqg.boundary.fields`) and the same readers (:mod:`pendulum_lqg.boundary`).
+
+Each schema returns the data it checked, with defaults filled in; an error is one line naming the
+file and the key (``board: a.json: suites.lecture.fingerprint: missing``).
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from pendulum_lqg.boundary import read_json
+from pendulum_lqg.boundary.fields import (
+    Where,
+    any_text,
+    boolean,
+    exactly,
+    integer,
+    list_of,
+    number,
+    one_of,
+    table,
+    text,
+)
+
+#: Version of the score files' layout.
+SCORE_VERSION = 1
+#: The algorithms a training record may name, and the package each comes from.
+ALGORITHMS = {"PPO": "stable_baselines3", "SAC": "stable_baselines3", "TD3": "stable_baselines3",
+              "A2C": "stable_baselines3", "DDPG": "stable_baselines3",
+              "RecurrentPPO": "sb3_contrib", "TQC": "sb3_contrib"}
+#: Ceiling of a training record's ``frame_stack`` (the agent keeps that many observations).
+MAX_FRAME_STACK = 10_000
+
+_RATE = number(low=0.0, high=1.0)
+_COST = number(nullable=True)
+
+
+def _figures(where: Where, data: Any, *, gap: bool) -> dict[str, Any]:
+    """The figures of a suite entry (``gap``) or of its reference / full-state bound."""
+    data = where.check(data, table)
+    out = {"success_rate": where.get(data, "success_rate", _RATE),
+           "cost_mean": where.get(data, "cost_mean", _COST)}
+    if gap:
+        out["optimality_gap"] = where.get(data, "optimality_gap", _COST, default=None)
+        out["gap_ci"] = where.get(data, "gap_ci", list_of(_COST, 2), default=[None, None])
+    else:
+        out["policy"] = where.get(data, "policy", text)
+    return out
+
+
+def score_suite(where: Where, data: Any) -> dict[str, Any]:
+    """One ``suites.NAME`` entry of a score file, as the board reads it."""
+    data = where.check(data, table)
+    out = {"applicable": where.get(data, "applicable", boolean, default=True),
+           "fingerprint": where.get(data, "fingerprint", text),
+           "episodes": where.get(data, "episodes", integer(1))}
+    if not out["applicable"]:
+        out["reason"] = where.get(data, "reason", any_text, default="")
+        return out
+    out.update(_figures(where, data, gap=True))
+    for key in ("reference", "full_state_bound"):
+        out[key] = _figures(where.at(key), where.get(data, key, table), gap=False)
+    return out
+
+
+def score_file(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The score file ``path`` (``pendulum-lqg score … --out FILE``), checked for every key the
+    board reads."""
+    data = read_json(path, where="board")
+    where = Where(f"board: {path}")
+    data = where.check(data, table)
+    where.get(data, "score_version", exactly(SCORE_VERSION))
+    suites = where.get(data, "suites", table)
+    return {"policy": where.get(data, "policy", text),
+            "kind": where.get(data, "kind", any_text, default=""),
+            "suites": {name: score_suite(where.at("suites").at(name), entry)
+                       for name, entry in suites.items()}}
+
+
+def _obs_norm(where: Where, data: Any) -> dict[str, Any] | None:
+    if data is None:
+        return None
+    data = where.check(data, table)
+    return {"mean": where.get(data, "mean", list_of(number())),
+            "var": where.get(data, "var", list_of(number(low=0.0))),
+            "clip": where.get(data, "clip", number(low=0.0), default=10.0),
+            "epsilon": where.get(data, "epsilon", number(low=0.0), default=1e-8)}
+
+
+def training_record(path: str | os.PathLike[str], *, where_text: str) -> dict[str, Any]:
+    """The training record beside a stable-baselines3 model (``PATH.json``; format in
+    :mod:`pendulum_lqg.scoreboard.sb3`)."""
+    from pendulum_lqg.envs.config import OBSERVATION_MODES
+
+    data = read_json(path, where=where_text)
+    where = Where(f"{where_text}: {path}")
+    data = where.check(data, table)
+    env = where.get(data, "env", table, default={})
+    where.at("env").get(env, "observation_mode", one_of(OBSERVATION_MODES), default="measurement")
+    frames = where.get(data, "frame_stack", integer(1), default=1)
+    if frames > MAX_FRAME_STACK:
+        raise where.error(f"at most {MAX_FRAME_STACK:,} (observations the agent keeps), got "
+                          f"{frames:,}", "frame_stack")
+    return {"algo": where.get(data, "algo", one_of(tuple(ALGORITHMS))),
+            "frame_stack": frames,
+            "obs_norm": _obs_norm(where.at("obs_norm"), data.get("obs_norm")),
+            "normalize_action": where.get(data, "normalize_action", boolean, default=False),
+            "env": dict(env), "budget": data.get("budget")}
+
+
+def unit_record(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """A work unit's check record (``units/KEY.json`` of a results folder; its fields:
+    :func:`pendulum_lqg.bench.results.ResultsDir.write_unit`); errors name the file and key."""
+    data = read_json(path, where="unit")
+    where = Where(f"unit: {path}")
+    data = where.check(data, table)
+    out = {key: where.get(data, key, check) for key, check in (
+        ("fingerprint", text), ("config", integer(0)), ("start", integer(0)),
+        ("stop", integer(0)), ("sha256", text), ("rows", integer(0)),
+        ("columns", list_of(any_text)))}
+    if "plugin_source" in data:
+        out["plugin_source"] = where.get(data, "plugin_source", text)
+    return out
+
+
+__all__ = ["ALGORITHMS", "MAX_FRAME_STACK", "SCORE_VERSION", "score_file", "score_suite",
+           "training_record", "unit_record"]

@@ -1,0 +1,279 @@
+r"""Any linear plant given as matrices: ``ẋ = A x + B u + G w``, ``y = C x + v``, sampled at T.
+
+A separate, explicit kind of plant beside the MuJoCo cart-pole (whose MJCF model stays the one
+source of truth of the cart-pole): the documents' double integrator, Franklin's third-order plant
+and Ogata's discrete example are files in ``experiments/lti/``, read by
+:func:`load_lti` from TOML or ``.npz``. An :class:`LTIPlant` carries its own noise (the density W
+of w, the per-sample covariance V of v), cost weights and force limit; :func:`design_lti_policy`
+designs the built-in controllers and observers on it, returning the same runtime
+:class:`~pendulum_lqg.policy.Policy`, and :func:`lti_theory` gives its stationary closed loop
+(:mod:`pendulum_lqg.analysis.theory`).
+
+A TOML file::
+
+    name = "double_integrator"
+    description = "…"
+    control_period = 0.1          # T [s]
+    A = [[0, 1], [0, 0]]          # or, for a plant given in discrete time: Phi, Gamma
+    B = [[0], [1]]
+    C = [[1, 0]]
+    G = [[1, 0], [0, 1]]          # optional, default I: where w enters
+    states = ["position", "velocity"]       # optional names
+    W = [1, 1]                    # density of w (diagonal or matrix), units²·s; or Wd, the
+                                  # per-period covariance of w (the documents' discrete Rw)
+    V = [1]                       # per-sample covariance of v (diagonal or matrix)
+    Q = [[1, 0], [0, 0]]          # optional cost weights (default CᵀC, R = 1)
+    R = 1
+    force_limit = inf             # optional saturation [input unit] (default inf)
+    observer_poles = [-2, -3]     # optional continuous Luenberger poles (default 3× the
+                                  # controller's, the documents' rule of thumb)
+
+An ``.npz`` holds the same names as arrays (``control_period`` a 0-d array).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pendulum_lqg._config import check_keys, positive_limit, positive_number
+from pendulum_lqg.errors import ConfigError
+
+#: The keys of an LTI plant file.
+LTI_KEYS = ("name", "description", "control_period", "A", "B", "C", "G", "Phi", "Gamma",
+            "states", "W", "Wd", "V", "Q", "R", "force_limit", "observer_poles", "x0")
+#: The built-in designs an LTI plant takes: controllers and observers.
+LTI_CONTROLLERS = ("lqr", "dlqr")
+LTI_OBSERVERS = ("none", "kalman", "kalman-predictor", "luenberger")
+
+
+@dataclass(frozen=True, eq=False)
+class LTIPlant:
+    """A linear plant from matrices (module docstring); validated when made.
+
+    Attributes
+    ----------
+    A (n, n), B (n, m), C (p, n), G (n, q) : the continuous model, or ``None`` for A, B when the
+        plant is given in discrete time (``Phi``, ``Gamma``)
+    Phi (n, n), Gamma (n, m) : the discrete model at ``control_period`` (exact ZOH of A, B)
+    control_period : T [s]; W (q, q) density of w, or, with ``W_per_period``, the covariance of
+        the w of one period; V (p, p) per-sample covariance of v
+    Q (n, n), R (m, m) : cost weights; force_limit : saturation (``inf``: none)
+    observer_poles : continuous Luenberger poles (n,), or ``None`` for the default
+    """
+
+    name: str
+    control_period: float
+    Phi: np.ndarray
+    Gamma: np.ndarray
+    C: np.ndarray
+    G: np.ndarray
+    W: np.ndarray
+    V: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+    A: np.ndarray | None = None
+    B: np.ndarray | None = None
+    force_limit: float = math.inf
+    W_per_period: bool = False
+    observer_poles: tuple[complex, ...] | None = None
+    states: tuple[str, ...] = ()
+    x0: np.ndarray | None = None
+    description: str = ""
+    path: Path | None = field(default=None, repr=False)
+
+    @property
+    def n_states(self) -> int:
+        return int(self.Phi.shape[0])
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return self.states or tuple(f"x{i + 1}" for i in range(self.n_states))
+
+    @property
+    def discrete(self) -> bool:
+        """Given in discrete time (no A, B): only its own (Φ, Γ) exist."""
+        return self.A is None
+
+    def process_covariance(self) -> np.ndarray:
+        """Covariance of the process noise over one period, ``∫₀ᵀ e^{As} G W Gᵀ e^{Aᵀs} ds``
+        (Van Loan), or ``G Wd Gᵀ`` for a per-period ``Wd`` (the documents' discrete ``Ψ Rw Ψᵀ``;
+        a plant given in discrete time has only that)."""
+        from pendulum_lqg import design
+
+        if self.A is None or self.W_per_period:
+            return self.G @ self.W @ self.G.T
+        return design.process_noise_covariance(self.A, self.G, self.W, self.control_period)
+
+
+def _matrix(where: str, value: Any, rows: int | None = None, cols: int | None = None) -> np.ndarray:
+    """A finite real matrix; a flat list is a row for ``C``-like keys only through ``rows``."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}: expected a matrix of numbers, got {value!r}") from None
+    if arr.ndim == 1 and rows == 1:
+        arr = arr[None, :]
+    if arr.ndim != 2 or not np.all(np.isfinite(arr)):
+        raise ConfigError(f"{where}: expected a finite 2-d matrix (a list of rows), got {value!r}")
+    if (rows is not None and arr.shape[0] != rows) or (cols is not None and arr.shape[1] != cols):
+        want = f"({rows if rows is not None else 'any'}, {cols if cols is not None else 'any'})"
+        raise ConfigError(f"{where}: expected shape {want}, found {arr.shape}")
+    return arr
+
+
+def _covariance(where: str, value: Any, n: int) -> np.ndarray:
+    """A diagonal (list of n) or an (n, n) symmetric positive semidefinite matrix."""
+    arr = np.asarray(value, dtype=float) if not isinstance(value, int | float) else \
+        np.full(n, float(value))
+    if arr.ndim == 1:
+        if arr.shape != (n,) or np.any(arr < 0) or not np.all(np.isfinite(arr)):
+            raise ConfigError(f"{where}: expected {n} finite non-negative numbers (a diagonal) or "
+                              f"an ({n}, {n}) matrix, got {value!r}")
+        return np.diag(arr)
+    arr = _matrix(where, arr, n, n)
+    if not np.allclose(arr, arr.T) or np.min(np.linalg.eigvalsh(arr)) < -1e-12:
+        raise ConfigError(f"{where}: expected a symmetric positive semidefinite matrix")
+    return arr
+
+
+def lti_from_mapping(data: dict[str, Any], *, name: str = "lti", path: Path | None = None,
+                     ) -> LTIPlant:
+    """Validate an LTI plant table (module docstring); every error names the key."""
+    from pendulum_lqg import design
+
+    check_keys("lti", data, LTI_KEYS)
+    T = positive_number("control_period", data.get("control_period"))
+    continuous = "A" in data or "B" in data
+    if continuous == ("Phi" in data or "Gamma" in data):
+        raise ConfigError("lti: give either A and B (continuous) or Phi and Gamma (discrete)")
+    key_a, key_b = ("A", "B") if continuous else ("Phi", "Gamma")
+    if key_a not in data or key_b not in data:
+        raise ConfigError(f"lti: {key_a} and {key_b} are required together")
+    M = _matrix(key_a, data[key_a])
+    n = M.shape[0]
+    M = _matrix(key_a, M, n, n)
+    Bm = _matrix(key_b, data[key_b], n)
+    C = _matrix("C", data.get("C", np.eye(n)), None, n)
+    G = _matrix("G", data.get("G", np.eye(n)), n)
+    p, m = C.shape[0], Bm.shape[1]
+    if "W" in data and "Wd" in data:
+        raise ConfigError("lti: give W (a density) or Wd (per period), not both")
+    per_period = "Wd" in data or not continuous
+    W = _covariance("Wd" if "Wd" in data else "W", data.get("Wd", data.get("W",
+                                                                            np.zeros(G.shape[1]))),
+                    G.shape[1])
+    V = _covariance("V", data.get("V", np.zeros(p)), p)
+    Q = _covariance("Q", data["Q"], n) if "Q" in data else C.T @ C
+    R = _covariance("R", data.get("R", 1.0), m)
+    if np.min(np.linalg.eigvalsh(R)) <= 0:
+        raise ConfigError("R: expected a positive definite input weight")
+    Phi, Gamma = design.zoh(M, Bm, T) if continuous else (M, Bm)
+    poles = data.get("observer_poles")
+    states = tuple(str(s) for s in data.get("states", ()))
+    if states and len(states) != n:
+        raise ConfigError(f"states: expected {n} names, got {len(states)}")
+    x0 = None if "x0" not in data else _matrix("x0", data["x0"], 1, n)[0]
+    return LTIPlant(
+        name=str(data.get("name", name)), description=str(data.get("description", "")),
+        control_period=T, Phi=Phi, Gamma=Gamma, C=C, G=G, W=W, V=V, Q=Q, R=R,
+        A=M if continuous else None, B=Bm if continuous else None,
+        force_limit=positive_limit("force_limit", data.get("force_limit", math.inf)),
+        W_per_period=per_period,
+        observer_poles=None if poles is None else tuple(complex(z) for z in
+                                                        np.atleast_1d(poles).tolist()),
+        states=states, x0=x0, path=path)
+
+
+def load_lti(path: str | Path) -> LTIPlant:
+    """Read an LTI plant from a TOML file or an ``.npz`` archive (module docstring)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"lti: no file {str(path)!r}")
+    try:
+        if path.suffix == ".npz":
+            with np.load(path, allow_pickle=False) as npz:
+                data: dict[str, Any] = {k: npz[k] for k in npz.files}
+            data = {k: (v.item() if v.ndim == 0 else v.tolist()) for k, v in data.items()}
+        else:
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError, ValueError, OSError) as exc:
+        raise ConfigError(f"lti: cannot read {path}: {' '.join(str(exc).split())}") from exc
+    try:
+        return lti_from_mapping(data, name=path.name.split(".")[0], path=path)
+    except ConfigError as exc:
+        raise ConfigError(f"{exc} (in {path})") from exc
+
+
+def design_lti_policy(plant: LTIPlant, name: str) -> Any:
+    """The built-in policy ``"controller+observer"`` on ``plant``: ``lqr`` (continuous, emulated
+    under sample-and-hold) or ``dlqr`` (on the ZOH model with the exact sampled cost weights);
+    observers ``none``, ``kalman`` (steady-state filter, current form), ``kalman-predictor``,
+    ``luenberger`` (current form, the plant's ``observer_poles`` by z = e^{sT}, default three
+    times the controller's). Returns a :class:`~pendulum_lqg.policy.Policy`."""
+    from pendulum_lqg import design
+    from pendulum_lqg.estimators import CurrentEstimator, PredictorEstimator, TrueState
+    from pendulum_lqg.policy import Policy
+
+    controller, _, observer = name.partition("+")
+    if controller not in LTI_CONTROLLERS or observer not in LTI_OBSERVERS:
+        raise ConfigError(f"policy: expected one of {', '.join(LTI_CONTROLLERS)} + one of "
+                          f"{', '.join(LTI_OBSERVERS)} for an LTI plant, got {name!r}")
+    T, Phi, Gamma, C = plant.control_period, plant.Phi, plant.Gamma, plant.C
+    if controller == "lqr":
+        if plant.A is None or plant.B is None:
+            raise ConfigError(f"policy: {plant.name!r} is given in discrete time; use dlqr")
+        K = design.lqr(plant.A, plant.B, plant.Q, plant.R).K
+    elif plant.A is not None and plant.B is not None:
+        Qd, Rd, Nd = design.sampled_cost(plant.A, plant.B, plant.Q, plant.R, T)
+        K = design.dlqr(Phi, Gamma, Qd, Rd, N=Nd).K
+    else:
+        K = design.dlqr(Phi, Gamma, plant.Q, plant.R).K
+    info: dict[str, Any] = {"K": K, "Phi": Phi, "Gamma": Gamma, "C": C}
+    n = plant.n_states
+    est: Any
+    if observer == "none":
+        est = TrueState(n)
+    elif observer in ("kalman", "kalman-predictor"):
+        kf = design.dkalman(Phi, np.eye(n), C, plant.process_covariance(), plant.V)
+        est = (CurrentEstimator(Phi, Gamma, C, kf.L, P=kf.P, M=kf.M) if observer == "kalman"
+               else PredictorEstimator(Phi - kf.L_pred @ C, Gamma, kf.L_pred, C, P=kf.M, M=kf.M))
+        info["L"], info["observer_poles"] = est.gain, kf.poles
+    else:
+        if plant.observer_poles is not None:     # s-plane, mapped by z = e^{sT}
+            obs = design.dluenberger(Phi, C, np.asarray(plant.observer_poles), form="current",
+                                     dt=T)
+        else:     # 3× the controller's s-poles, the documents' rule: z = z_c³ (e^{3sT})
+            z = np.linalg.eigvals(Phi - Gamma @ K)
+            obs = design.dluenberger(Phi, C, z ** 3, form="current")
+        est = CurrentEstimator(Phi, Gamma, C, obs.L)
+        info["L"], info["observer_poles"] = obs.L, obs.poles
+    return Policy(K=K, estimator=est, u_max=plant.force_limit, name=name,
+                  x_hat0=np.zeros(n), info=info)
+
+
+def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+luenberger"), *,
+               noise_scale: float = 1.0, duration: float = 10.0) -> dict[str, Any]:
+    """The stationary closed loop (:class:`~pendulum_lqg.analysis.theory.ClosedLoopTheory`) of
+    each built-in policy on ``plant`` with its noise scaled by ``noise_scale`` (std)."""
+    from pendulum_lqg.analysis.theory import StationaryProblem, linear_estimator, stationary
+
+    s2 = float(noise_scale) ** 2
+    out = {}
+    for name in names:
+        policy = design_lti_policy(plant, name)
+        prob = StationaryProblem(kind="linear-zoh", Phi=plant.Phi, Gamma=plant.Gamma, k=1,
+                                 h=plant.control_period, C=plant.C, K=policy.K,
+                                 estimator=linear_estimator(policy),
+                                 Wd=plant.process_covariance() * s2, V=plant.V * s2,
+                                 Q=plant.Q, R=plant.R)
+        out[name] = stationary(prob, name=name, duration=duration,
+                               limits={"force_limit": plant.force_limit},
+                               state_names=plant.state_names,
+                               units=("",) * plant.n_states)
+    return out

@@ -1,0 +1,95 @@
+"""Plants given as matrices (pendulum_lqg.lti): the experiments' files, their designs against the
+documents' numbers, the theory, and one-line errors."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pendulum_lqg.cli import main
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.lti import design_lti_policy, load_lti, lti_from_mapping, lti_theory
+
+EXPERIMENTS = Path(__file__).resolve().parents[1] / "experiments" / "lti"
+
+
+def test_double_integrator_designs_tend_to_the_continuous_ones():
+    """At T = 0.01 s the sampled LQ gain is close to K = [1, √2] and the filter gain to L·T with
+    the Kalman–Bucy L = [√3, 1]ᵀ (theory §5.2); the continuous lqr gain is exact."""
+    di = load_lti(EXPERIMENTS / "double_integrator.toml")
+    assert di.n_states == 2 and di.state_names == ("position", "velocity")
+    np.testing.assert_allclose(design_lti_policy(di, "lqr+none").K, [[1, math.sqrt(2)]],
+                               atol=1e-9)
+    np.testing.assert_allclose(design_lti_policy(di, "dlqr+none").K, [[1, math.sqrt(2)]],
+                               rtol=1e-2)
+    L = design_lti_policy(di, "dlqr+kalman").info["L"]
+    np.testing.assert_allclose(L.ravel(), [math.sqrt(3) * 0.01, 0.01], rtol=2e-2)
+    # the stationary estimation error of the sampled filter tends to the Kalman–Bucy
+    # Σ = [[√3, 1], [1, √3]]: both stds √√3
+    err = lti_theory(di, ("dlqr+kalman",))["dlqr+kalman"].estimate_error_std
+    assert err["position"] == pytest.approx(3 ** 0.25, rel=1e-2)
+    assert err["velocity"] == pytest.approx(3 ** 0.25, rel=1e-2)
+
+
+def test_ogata_and_franklin_files_reproduce_the_documents():
+    ogata = load_lti(EXPERIMENTS / "ogata_discrete.toml")
+    assert ogata.discrete
+    np.testing.assert_allclose(design_lti_policy(ogata, "dlqr+none").K, [[1.0, 0.7913]],
+                               atol=5e-5)
+    franklin = load_lti(EXPERIMENTS / "franklin_third_order.toml")
+    poles = design_lti_policy(franklin, "dlqr+luenberger").info["observer_poles"]
+    expected = np.exp(np.array([-21, -22 + 2j, -22 - 2j]) * 0.02)
+    assert np.sort_complex(poles) == pytest.approx(np.sort_complex(expected), abs=1e-9)
+    # MATLAB's dlqe(Φ, Ψ, C, Rw, Rv) returns the filter gain; python-control's the predictor gain
+    control = pytest.importorskip("control")
+    kf = design_lti_policy(franklin, "dlqr+kalman").info["L"]
+    L_p = control.dlqe(franklin.Phi, franklin.G, franklin.C, 0.01, 0.01)[0]
+    np.testing.assert_allclose(franklin.Phi @ kf, L_p, rtol=1e-8)
+
+
+def test_lti_theory_scalar_closed_form():
+    """x⁺ = a x + u + w, full state, u = −k x: Var x = Wd / (1 − (a − k)²)."""
+    plant = lti_from_mapping({"control_period": 1.0, "Phi": [[1.2]], "Gamma": [[1.0]],
+                              "W": [0.5], "V": [1.0], "Q": [[1.0]], "R": 1.0})
+    res = lti_theory(plant, ("dlqr+none",))["dlqr+none"]
+    k = float(design_lti_policy(plant, "dlqr+none").K[0, 0])
+    assert res.spectral_radius == pytest.approx(abs(1.2 - k))
+    assert res.std["x1"] == pytest.approx(math.sqrt(0.5 / (1 - (1.2 - k) ** 2)), rel=1e-12)
+
+
+def test_theory_cli_on_the_double_integrator(capsys):
+    import json
+
+    assert main(["theory", "--lti", str(EXPERIMENTS / "double_integrator.toml"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out["policies"]) == {"dlqr+none", "dlqr+kalman", "dlqr+luenberger"}
+    assert all(p["stable"] for p in out["policies"].values())
+    assert set(out["policies"]["dlqr+kalman"]["std"]) == {"position", "velocity"}
+
+
+@pytest.mark.parametrize("table, message", [
+    ({"control_period": 0.1, "A": [[0, 1], [0, 0]]}, "A and B are required together"),
+    ({"control_period": 0.1, "A": [[0, 1]], "B": [[0], [1]]}, "A: expected shape"),
+    ({"control_period": 0.1, "A": [[0]], "B": [[1]], "Phi": [[1]]}, "either A and B"),
+    ({"control_period": 0.1, "A": [[0]], "B": [[1]], "W": [-1]}, "W: expected 1 finite"),
+    ({"control_period": 0.1, "A": [[0]], "B": [[1]], "bogus": 1}, "unknown key 'bogus'"),
+    ({"control_period": -1, "A": [[0]], "B": [[1]]}, "control_period"),
+])
+def test_bad_lti_tables_name_the_key(table, message):
+    with pytest.raises(ConfigError, match=message):
+        lti_from_mapping(table)
+
+
+def test_npz_and_toml_give_the_same_plant(tmp_path):
+    di = load_lti(EXPERIMENTS / "double_integrator.toml")
+    path = tmp_path / "di.npz"
+    np.savez(path, control_period=0.01, A=di.A, B=di.B, C=di.C, W=np.diag(di.W), V=np.diag(di.V),
+             Q=di.Q, R=1.0)
+    again = load_lti(path)
+    np.testing.assert_array_equal(again.Phi, di.Phi)
+    np.testing.assert_array_equal(again.V, di.V)
+    with pytest.raises(ConfigError, match="policy: expected one of lqr, dlqr"):
+        design_lti_policy(again, "dlqr+hinf")
