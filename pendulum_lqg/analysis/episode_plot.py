@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import functools
 import io
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -85,7 +86,7 @@ def plot_episode(trajectory: Trajectory, *, plant: Plant | None = None,
                           f"N ≥ 1, got t {t.shape} and x {x.shape}")
     n = x.shape[1]
     labels = state_labels(n)
-    limits = _limits(plant, scenario, n)
+    limits, u_max = _limits(plant, scenario, n)
     ncol = 2
     nrow = -(-(n + 2) // ncol)
     with matplotlib.rc_context(_STYLE):
@@ -95,7 +96,7 @@ def plot_episode(trajectory: Trajectory, *, plant: Plant | None = None,
         for i in range(n):
             _state_panel(axes[i], trajectory, i, labels[i], limits.get(i))
         _measurement_panel(axes[n], trajectory, labels)
-        _force_panel(axes[n + 1], trajectory, None if plant is None else plant.u_max)
+        _force_panel(axes[n + 1], trajectory, u_max)
         for ax in axes[n + 2:]:
             fig.delaxes(ax)
         for ax in axes[n:n + 2]:          # the bottom panels of their columns
@@ -146,16 +147,23 @@ def check_plot_path(path: str | Path) -> Path:
     return output_file("--plot", path, what="picture")
 
 
-def _limits(plant: Plant | None, scenario: Scenario | None, n: int) -> dict[int, float]:
-    """The failure limit drawn on each state panel (finite ones only): track on p, θ_max on θ."""
-    if n != 4:
-        return {}
-    out = {}
-    if plant is not None and np.isfinite(plant.track_limit):
-        out[0] = float(plant.track_limit)
-    if scenario is not None and np.isfinite(scenario.theta_max):
-        out[1] = float(scenario.theta_max)
-    return out
+def _limits(plant: Plant | None, scenario: Scenario | None, n: int) -> tuple[dict[int, float], float | None]:
+    """The limits in force, as drawn: the failure limit of each state panel (track on p, θ_max on
+    θ) and the force limit on u, finite ones only. With both the plant and the scenario they are
+    the core's (:func:`~pendulum_lqg.core.rules.limits`: a scenario's limit overrides the
+    model's, ``inf`` switches one off); with one of them, what that one says."""
+    from pendulum_lqg.core.rules import limits
+
+    theta_max = track = u_max = math.inf
+    if plant is not None and scenario is not None:
+        theta_max, track, u_max = limits(plant, scenario)
+    elif plant is not None:
+        track, u_max = plant.track_limit, plant.u_max
+    elif scenario is not None:
+        theta_max = scenario.theta_max
+    states = {i: float(v) for i, v in ((0, track), (1, theta_max)) if math.isfinite(v)} \
+        if n == 4 else {}
+    return states, (float(u_max) if math.isfinite(u_max) else None)
 
 
 def _state_panel(ax: Any, tr: Trajectory, i: int, label: str, limit: float | None) -> None:
