@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import stat
@@ -49,6 +50,12 @@ def test_one_panel_per_state_then_y_and_u_with_the_limits(plant):
     assert hlines(fig.axes[1]) == pytest.approx([-sc.theta_max, sc.theta_max])
     assert hlines(fig.axes[5]) == pytest.approx([-plant.u_max, plant.u_max])
     assert plant.track_limit == pytest.approx(2.4) and plant.u_max == pytest.approx(10.0)
+    # the limits in force are the scenario's: a smaller track and force, θ_max switched off
+    tr, sc = _episode(plant, "dlqr+kalman", track_limit=1.5, force_limit=4.0, theta_max=math.inf)
+    fig = plot_episode(tr, plant=plant, scenario=sc)
+    assert hlines(fig.axes[0]) == pytest.approx([-1.5, 1.5])
+    assert hlines(fig.axes[1]) == []
+    assert hlines(fig.axes[5]) == pytest.approx([-4.0, 4.0])
     # the measurement panel draws y itself, both channels
     ys = [line.get_ydata() for line in fig.axes[4].get_lines()]
     np.testing.assert_array_equal(ys[0], tr.y[:, 0])
