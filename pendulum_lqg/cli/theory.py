@@ -72,7 +72,8 @@ def _print_table(results: dict[str, Any], header: str) -> None:
     first = next(iter(results.values()))
     a, b = first.state_names[:2]
     unit = dict(zip(first.state_names, first.units, strict=True))
-    for col in ("policy", "radius", _head("std", a, unit[a]), _head("std", b, unit[b]), "std u",
+    t.add_column("policy", no_wrap=True)          # a policy's name is never cut
+    for col in ("radius", _head("std", a, unit[a]), _head("std", b, unit[b]), "std u",
                 _head("std error of", b, unit[b]), "J"):
         t.add_column(escape(col))
     for name, r in results.items():
