@@ -125,6 +125,8 @@ def training_record(path: str | os.PathLike[str], *, where_text: str) -> dict[st
         raise where.error(f"at most {MAX_FRAME_STACK:,} (observations the agent keeps), got "
                           f"{frames:,}", "frame_stack")
     return {"algo": where.get(data, "algo", one_of(tuple(ALGORITHMS))),
+            "method": where.get(data, "method", text, default=None),
+            "seed": where.get(data, "seed", integer(0), default=None),
             "frame_stack": frames,
             "obs_norm": _obs_norm(where.at("obs_norm"), data.get("obs_norm")),
             "normalize_action": where.get(data, "normalize_action", boolean, default=False),

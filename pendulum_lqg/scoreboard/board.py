@@ -93,7 +93,7 @@ def _score(entry: dict[str, Any]) -> str:
 def _with_scores(scores: Scores, prints: dict[str, str]) -> None:
     """Give every comparable entry without a ``score_mean`` the one its rows and its reference's
     rows give (see the module docstring); ``None`` where either is missing."""
-    reference_rows = {}
+    reference_rows: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for _, d in scores:
         for s, e in d["suites"].items():
             if e.get("fingerprint") == prints.get(s) and e.get("applicable", True) and "rows" in e:

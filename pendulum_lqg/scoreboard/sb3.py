@@ -101,24 +101,59 @@ def load_model(path: Path, algo: str) -> Any:
                           f"{' '.join(str(exc).split())[:200]}") from exc
 
 
-def sb3_agent(path_text: str) -> Any:
-    """The agent factory of ``sb3:PATH.zip``; its ``normalize_action`` attribute tells the score
-    which action space the model was trained on."""
+class SB3Factory:
+    """The agent factory of ``sb3:PATH.zip``: ``factory(env)`` is an :class:`SB3Agent` of the
+    model. ``normalize_action`` tells the score which action space the model was trained on;
+    ``run`` (``method``, ``seed``, ``model_sha256``) and ``versions`` (torch, stable-baselines3,
+    sb3-contrib) go into the score file."""
+
+    def __init__(self, path_text: str, meta: dict[str, Any], model: Any) -> None:
+        self.path_text, self.meta, self.model = path_text, meta, model
+        self.normalize_action: bool = meta["normalize_action"]
+        self.env: dict[str, Any] = dict(meta["env"])
+        self.run: dict[str, Any] = {"model_sha256": file_sha256(Path(path_text))}
+        self.run.update({k: meta[k] for k in ("method", "seed") if meta.get(k) is not None})
+        self.versions = rl_versions()
+
+    def __call__(self, env: gym.Env) -> SB3Agent:
+        trained_on = self.env.get("observation_mode", "measurement")
+        mode = getattr(env.unwrapped, "observation_mode", None)
+        if mode != trained_on:
+            raise NotApplicable(f"agent sb3:{self.path_text} was trained on observation_mode = "
+                                f"{trained_on!r}; this suite's env has {mode!r}")
+        return SB3Agent(self.model, frame_stack=self.meta["frame_stack"],
+                        obs_norm=self.meta["obs_norm"])
+
+
+def file_sha256(path: Path) -> str:
+    """The sha256 of the file ``path`` (hex), read in 1 MiB chunks."""
+    import hashlib
+
+    digest = hashlib.sha256()
+    with path.open("rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def rl_versions() -> dict[str, str]:
+    """The installed versions of the RL libraries a model's score depends on (``"absent"``: not
+    installed), read from the package metadata without importing them."""
+    from importlib import metadata
+
+    out = {}
+    for lib in ("torch", "stable-baselines3", "sb3-contrib"):
+        try:
+            out[lib] = metadata.version(lib)
+        except metadata.PackageNotFoundError:
+            out[lib] = "absent"
+    return out
+
+
+def sb3_agent(path_text: str) -> SB3Factory:
+    """The agent factory of ``sb3:PATH.zip`` (see :class:`SB3Factory`)."""
     path = Path(path_text)
     if not path.is_file():
         raise ConfigError(f"agent: sb3:{path_text}: no such model file")
     meta = read_metadata(path)
-    model = load_model(path, meta["algo"])
-
-    trained_on = meta["env"].get("observation_mode", "measurement")
-
-    def factory(env: gym.Env) -> SB3Agent:
-        mode = getattr(env.unwrapped, "observation_mode", None)
-        if mode != trained_on:
-            raise NotApplicable(f"agent sb3:{path_text} was trained on observation_mode = "
-                                f"{trained_on!r}; this suite's env has {mode!r}")
-        return SB3Agent(model, frame_stack=meta["frame_stack"], obs_norm=meta["obs_norm"])
-
-    factory.normalize_action = meta["normalize_action"]     # type: ignore[attr-defined]
-    factory.env = dict(meta["env"])                         # type: ignore[attr-defined]
-    return factory
+    return SB3Factory(path_text, meta, load_model(path, meta["algo"]))

@@ -177,8 +177,10 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
             f"agent {agent!r}", "reading normalize_action",
             lambda: bool(getattr(factory, "normalize_action", False)))
         name, kind = agent, "agent"
-        if agent.startswith("sb3:"):    # its training record: the method and seed it is a run
-            run, extra_versions = factory.run, factory.versions     # of, its libraries, its hash
+        from pendulum_lqg.scoreboard.sb3 import SB3Factory
+
+        if isinstance(factory, SB3Factory):     # the method and seed it is a run of, its model's
+            run, extra_versions = factory.run, factory.versions     # sha256, torch / SB3 versions
 
         def rows_of(s: Suite) -> list[dict[str, Any]]:
             return ep.agent_rows(s, factory, name=agent, normalize_action=normalized)

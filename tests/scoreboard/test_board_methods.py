@@ -128,3 +128,32 @@ def test_a_damaged_method_seed_row_or_score_is_one_line(tmp_path, change, messag
     (tmp_path / "a.json").write_text(json.dumps(doc))
     with pytest.raises(ConfigError, match="^board: .*a.json: " + message.replace("(", r"\(")):
         score_file(tmp_path / "a.json")
+
+
+class _ZeroModel:
+    """stable-baselines3's predict signature, always a zero action (no torch needed)."""
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=False):
+        return np.zeros((observation.shape[0], 1)), state
+
+
+def test_an_sb3_score_file_names_its_method_seed_model_hash_and_rl_versions(tmp_path, monkeypatch):
+    import hashlib
+
+    from pendulum_lqg.scoreboard import sb3
+    from pendulum_lqg.scoreboard.score import score_entry
+
+    model = tmp_path / "ppo-history-seed3.zip"
+    model.write_bytes(b"not a real zip: the loader is stood in")
+    record = {"algo": "PPO", "method": "ppo-history", "seed": 3, "frame_stack": 1,
+              "obs_norm": None, "normalize_action": True, "env": {}}
+    model.with_suffix(".json").write_text(json.dumps(record))
+    monkeypatch.setattr(sb3, "load_model", lambda path, algo: _ZeroModel())
+    doc = score_entry([load_suite("lecture").with_episodes(2)], agent=f"sb3:{model}")
+    assert doc["method"] == "ppo-history" and doc["seed"] == 3
+    assert doc["model_sha256"] == hashlib.sha256(model.read_bytes()).hexdigest()
+    assert set(doc["versions"]) >= {"torch", "stable-baselines3", "sb3-contrib", "pendulum_lqg"}
+    lecture = doc["suites"]["lecture"]
+    assert lecture["success_rate"] == 0.0 and lecture["score_mean"] == 0.0   # zero force falls
+    (tmp_path / "run.json").write_text(json.dumps(doc))
+    assert score_file(tmp_path / "run.json")["method"] == "ppo-history"
