@@ -128,6 +128,7 @@ def training_record(path: str | os.PathLike[str], *, where_text: str) -> dict[st
             "method": where.get(data, "method", text, default=None),
             "seed": where.get(data, "seed", integer(0), default=None),
             "frame_stack": frames,
+            "past_actions": where.get(data, "past_actions", boolean, default=False),
             "obs_norm": _obs_norm(where.at("obs_norm"), data.get("obs_norm")),
             "normalize_action": where.get(data, "normalize_action", boolean, default=False),
             "env": dict(env), "budget": data.get("budget")}
