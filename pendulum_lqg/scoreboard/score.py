@@ -183,6 +183,10 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
             run, extra_versions = factory.run, factory.versions     # sha256, torch / SB3 versions
 
         def rows_of(s: Suite) -> list[dict[str, Any]]:
+            if isinstance(factory, SB3Factory):     # all episodes at once, one predict a period
+                from pendulum_lqg.scoreboard.sb3_batch import batched_rows
+
+                return batched_rows(s, factory, normalize_action=normalized)
             return ep.agent_rows(s, factory, name=agent, normalize_action=normalized)
     else:
         assert policy is not None

@@ -4,6 +4,7 @@ agent rebuilds from the training record on the same episode."""
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 
 import gymnasium as gym
@@ -114,3 +115,44 @@ def test_training_observations_are_what_the_scorer_rebuilds_from_the_record(base
         last = np.tanh(trained_on[-1] @ policy.gain)
         assert terminal[-1] == pytest.approx(float(np.clip(last, -1, 1)[0]))
     venv.close()
+
+
+class _Recurrent(_Linear):
+    """A stand-in recurrent policy: its state (one number per row) counts the row's steps since
+    its episode start, and the action depends on it (so a state mixed between rows shows)."""
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=False):
+        n = observation.shape[0]
+        count = np.zeros(n) if state is None else np.where(episode_start, 0.0, state[0])
+        count = count + 1.0
+        action = np.tanh(observation @ self.gain) * (1.0 - 0.5 * np.exp(-count[:, None] / 10))
+        return action, (count,)
+
+
+@pytest.mark.parametrize("model_class", [_Linear, _Recurrent], ids=["mlp", "recurrent"])
+def test_batched_scoring_gives_the_rows_of_the_one_episode_path(tmp_path, model_class,
+                                                                monkeypatch):
+    from pendulum_lqg.scoreboard import episodes as ep
+    from pendulum_lqg.scoreboard import sb3_batch
+    from pendulum_lqg.scoreboard.sb3 import SB3Factory
+    from pendulum_lqg.scoreboard.sb3_batch import batched_rows
+    from pendulum_lqg.scoreboard.suites import load_suite
+
+    suite = load_suite("lossy").with_episodes(5)          # dropout: the held samples too
+    suite = dataclasses.replace(suite, env={**suite.env, "duration": 0.3, "theta_max": 0.3,
+                                            "x0_std": [0.0, 0.15, 0.0, 0.0]})
+    design = ObservationDesign(4, past_actions=True)
+    size = 4 * 3
+    norm = {"mean": [0.0] * size, "var": [0.5] * size, "clip": 10.0, "epsilon": 1e-8}
+    (tmp_path / "m.zip").write_bytes(b"stand-in")
+    meta = {"algo": "PPO", "normalize_action": True, "env": {}, "obs_norm": norm,
+            **design.record()}
+    factory = SB3Factory(str(tmp_path / "m.zip"), meta, model_class(size))
+    one = ep.agent_rows(suite, factory, normalize_action=True)
+    monkeypatch.setattr(sb3_batch, "CHUNK", 2)            # 5 episodes in chunks of 2, 2, 1
+    batched = batched_rows(suite, factory)
+    assert [(r["episode"], r["seed"], r["success"], r["failure_reason"]) for r in batched] == \
+        [(r["episode"], r["seed"], r["success"], r["failure_reason"]) for r in one]
+    np.testing.assert_allclose([r["cost"] for r in batched], [r["cost"] for r in one],
+                               rtol=1e-9)
+    assert {r["success"] for r in one} == {True, False}     # both ends were played
