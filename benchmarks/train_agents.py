@@ -113,18 +113,18 @@ def obs_norm_of(norm: Any) -> dict[str, Any]:
 def evaluate(model: Any, m: Method, norm: Any, suite: Any, reference: list[dict[str, Any]],
              ) -> dict[str, float | None]:
     """Success and failure-aware score of the deterministic policy on the curve's episodes."""
-    from pendulum_lqg.scoreboard import episodes as ep
-    from pendulum_lqg.scoreboard.sb3 import SB3Agent
+    from types import SimpleNamespace
+
+    from pendulum_lqg.scoreboard.sb3_batch import batched_rows
     from pendulum_lqg.scoreboard.score import success_figures
     from pendulum_lqg.scoreboard.stats import failure_aware_figures
 
-    stats = obs_norm_of(norm)
-
-    def factory(env: Any) -> SB3Agent:
-        return SB3Agent(model, frame_stack=m.frame_stack, past_actions=m.past_actions,
-                        obs_norm=stats, low=env.action_space.low, high=env.action_space.high)
-
-    rows = ep.agent_rows(eval_suite(suite), factory, normalize_action=True)
+    # the scorer's batched path, with the statistics VecNormalize holds now (the record's later)
+    run = SimpleNamespace(path_text=f"(training {m.algo})", model=model, normalize_action=True,
+                          env=suite.env, meta={"frame_stack": m.frame_stack,
+                                               "past_actions": m.past_actions,
+                                               "obs_norm": obs_norm_of(norm)})
+    rows = batched_rows(eval_suite(suite), run)
     fig = failure_aware_figures(rows, reference)
     lo, hi = fig["score_ci"]
     return {"success_rate": success_figures(rows)["success_rate"],
@@ -162,6 +162,7 @@ def train(method: str, out: Path, *, seed: int, steps: int | None = None,
     model.save(str(path))
     _write_curve(path.with_name(f"{run_name(method, seed)}-curve.csv"), curve)
     record = _record(method, m, seed, steps, venv, suite, curve)
+    record["budget"]["steps"] = done        # PPO rolls out whole n_steps × envs: may exceed
     path.with_suffix(".json").write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     return path
 
@@ -193,7 +194,7 @@ def _record(method: str, m: Method, seed: int, steps: int, venv: Any, suite: Any
             "normalize_action": True, "obs_norm": obs_norm_of(venv),
             "wrappers": "VecNormalize(history(native_vec_env))", "env_id": pendulum_lqg.ENV_ID,
             "env": suite.env, "reward": "v0 (exp(-c / (s·T)))",
-            "budget": {"steps": steps, "seed": seed, "envs": m.envs,
+            "budget": {"steps": steps, "steps_requested": steps, "seed": seed, "envs": m.envs,
                        "env_seeds": f"{TRAIN_SEED_BASE + 1000 * seed} + i",
                        "wall_seconds": curve[-1]["wall_seconds"], "threads": 1,
                        "kwargs": m.kwargs},

@@ -27,7 +27,8 @@ def test_a_short_run_saves_its_model_record_and_curve_and_scores_with_its_design
     record = json.loads(path.with_suffix(".json").read_text())
     assert record["method"] == "ppo-history" and record["seed"] == 1 and record["algo"] == "PPO"
     assert record["frame_stack"] == 32 and record["past_actions"] is True
-    assert len(record["obs_norm"]["mean"]) == 32 * 3 and record["budget"]["steps"] == 512
+    assert len(record["obs_norm"]["mean"]) == 32 * 3 and record["budget"]["steps"] == 16 * 256
+    assert record["budget"]["steps_requested"] == 512
     with (tmp_path / "ppo-history-seed1-curve.csv").open() as f:
         curve = list(csv.DictReader(f))
     assert [int(r["env_steps"]) for r in curve] == [16 * 256]      # one PPO rollout of 16 envs
