@@ -159,6 +159,24 @@ def methods_table(scores: Scores, suites: list[str], prints: dict[str, str]) -> 
     return lines
 
 
+def _reference_lines(scores: Scores, suites: list[str], prints: dict[str, str]) -> list[str]:
+    """The rows of each suite's reference and full-state bound (from any comparable entry)."""
+    lines = []
+    for label, key in (("reference", "reference"), ("full-state bound", "full_state_bound")):
+        cells = [label, ""]
+        for s in suites:
+            e = next((d["suites"][s] for _, d in scores
+                      if s in d["suites"] and d["suites"][s]["fingerprint"] == prints[s]
+                      and d["suites"][s].get("applicable", True)), None)
+            if e is None:
+                cells += ["", "", "", ""]
+                continue
+            ref = e[key]
+            cells += [_pct(ref["success_rate"]), _num(ref["cost_mean"]), f"`{ref['policy']}`", ""]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
 def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> str:
     """The Markdown board of the score files in ``folder``. Damaged files are skipped and listed
     under the table (and each reported to ``warn``, one line; see :func:`read_scores`)."""
@@ -191,18 +209,7 @@ def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> st
                 continue
             cells += [_pct(e["success_rate"]), _num(e["cost_mean"]), _gap(e), _score(e)]
         lines.append("| " + " | ".join(cells) + " |")
-    for label, key in (("reference", "reference"), ("full-state bound", "full_state_bound")):
-        cells = [label, ""]
-        for s in suites:
-            e = next((d["suites"][s] for _, d in scores
-                      if s in d["suites"] and d["suites"][s]["fingerprint"] == prints[s]
-                      and d["suites"][s].get("applicable", True)), None)
-            if e is None:
-                cells += ["", "", "", ""]
-                continue
-            ref = e[key]
-            cells += [_pct(ref["success_rate"]), _num(ref["cost_mean"]), f"`{ref['policy']}`", ""]
-        lines.append("| " + " | ".join(cells) + " |")
+    lines += _reference_lines(scores, suites, prints)
     episodes = {s: next(d["suites"][s]["episodes"] for _, d in scores
                         if s in d["suites"] and d["suites"][s]["fingerprint"] == prints[s])
                 for s in suites}

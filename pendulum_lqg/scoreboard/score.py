@@ -169,31 +169,21 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
                       lambda: ep.full_state_rows(s, nthread=nthread))
 
     rows_of: Callable[[Suite], list[dict[str, Any]]]
-    run: dict[str, Any] | None = None
-    extra_versions: dict[str, str] = {}
     if agent is not None:
         factory = ep.load_agent(agent, base_dir=base_dir)
         normalized = normalize_action or guard(
             f"agent {agent!r}", "reading normalize_action",
             lambda: bool(getattr(factory, "normalize_action", False)))
         name, kind = agent, "agent"
-        from pendulum_lqg.scoreboard.sb3 import SB3Factory
-
-        if isinstance(factory, SB3Factory):     # the method and seed it is a run of, its model's
-            run, extra_versions = factory.run, factory.versions     # sha256, torch / SB3 versions
-
-        def rows_of(s: Suite) -> list[dict[str, Any]]:
-            if isinstance(factory, SB3Factory):     # all episodes at once, one predict a period
-                from pendulum_lqg.scoreboard.sb3_batch import batched_rows
-
-                return batched_rows(s, factory, normalize_action=normalized)
-            return ep.agent_rows(s, factory, name=agent, normalize_action=normalized)
+        run, extra_versions = _run_of(factory)
+        rows_of = _agent_rows_of(agent, factory, normalized)
     else:
         assert policy is not None
         if not policy:
             raise ConfigError("policy: expected 'controller+observer' or a plug-in MODULE:ATTR, "
                               "got ''")
         name, kind = policy, ("plugin" if is_plugin_ref(policy) else "builtin")
+        run, extra_versions = _run_of(None)
 
         def rows_of(s: Suite) -> list[dict[str, Any]]:
             if kind == "builtin" and policy == s.reference:   # the reference itself: one run
@@ -202,6 +192,31 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
 
     return score_document(name, kind, suites, rows_of, reference_of, bound_of,
                           {**versions(), **extra_versions}, on_suite, run)
+
+
+def _run_of(factory: Any) -> tuple[dict[str, Any] | None, dict[str, str]]:
+    """An sb3 model's run (method, seed, the model's sha256) and its libraries' versions."""
+    from pendulum_lqg.scoreboard.sb3 import SB3Factory
+
+    if isinstance(factory, SB3Factory):
+        return factory.run, factory.versions
+    return None, {}
+
+
+def _agent_rows_of(agent: str, factory: Any, normalized: bool,
+                   ) -> Callable[[Suite], list[dict[str, Any]]]:
+    """The rows of an agent on a suite: an sb3 model batched (all episodes at once, one predict
+    per control period), any other agent one episode after another."""
+    from pendulum_lqg.scoreboard import episodes as ep
+    from pendulum_lqg.scoreboard.sb3 import SB3Factory
+
+    def rows_of(s: Suite) -> list[dict[str, Any]]:
+        if isinstance(factory, SB3Factory):
+            from pendulum_lqg.scoreboard.sb3_batch import batched_rows
+
+            return batched_rows(s, factory, normalize_action=normalized)
+        return ep.agent_rows(s, factory, name=agent, normalize_action=normalized)
+    return rows_of
 
 
 def _finite(value: float) -> float | None:
