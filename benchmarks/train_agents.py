@@ -88,8 +88,8 @@ def run_name(method: str, seed: int) -> str:
 
 
 def make_training_env(m: Method, seed: int) -> tuple[Any, Any]:
-    """``VecNormalize(design(native vector env))`` of method ``m`` and run ``seed``, and the
-    suite."""
+    """``VecNormalize(design(native vector env))`` of method ``m``, and the suite (seeded by
+    :func:`build`)."""
     from stable_baselines3.common.vec_env import VecNormalize
 
     from pendulum_lqg.scoreboard.obs_design import ObservationDesign, history_vec_env
@@ -97,8 +97,7 @@ def make_training_env(m: Method, seed: int) -> tuple[Any, Any]:
     from pendulum_lqg.scoreboard.suites import load_suite
 
     suite = load_suite(m.suite)
-    venv = native_vec_env(m.envs, seed=TRAIN_SEED_BASE + 1000 * seed, nthread=1,
-                          normalize_action=True, **suite.env)
+    venv = native_vec_env(m.envs, nthread=1, normalize_action=True, **suite.env)
     design = ObservationDesign(m.frame_stack, m.past_actions)
     if design != ObservationDesign():
         venv = history_vec_env(venv, design)
@@ -145,8 +144,7 @@ def train(method: str, out: Path, *, seed: int, steps: int | None = None,
     m = METHODS[method]
     steps = steps or m.steps
     torch.set_num_threads(1)
-    venv, suite = make_training_env(m, seed)
-    model = _model(m, venv, seed)
+    model, venv, suite = build(m, seed)
     reference = ep.policy_rows(eval_suite(suite), suite.reference, nthread=1)
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{run_name(method, seed)}.zip"
@@ -165,6 +163,16 @@ def train(method: str, out: Path, *, seed: int, steps: int | None = None,
     record["budget"]["steps"] = done        # PPO rolls out whole n_steps × envs: may exceed
     path.with_suffix(".json").write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     return path
+
+
+def build(m: Method, seed: int) -> tuple[Any, Any, Any]:
+    """The model, its training env and the suite of run ``seed`` of ``m``, the env seeded for
+    its first reset (SB3 seeds the env with the model's seed when it builds the model: seeded
+    again after that, sub-env i starts from TRAIN_SEED_BASE + 1000·seed + i)."""
+    venv, suite = make_training_env(m, seed)
+    model = _model(m, venv, seed)
+    venv.seed(TRAIN_SEED_BASE + 1000 * seed)
+    return model, venv, suite
 
 
 def _model(m: Method, venv: Any, seed: int) -> Any:
