@@ -15,6 +15,7 @@ from typing import Any
 
 from pendulum_lqg.boundary import read_json
 from pendulum_lqg.boundary.fields import (
+    Invalid,
     Where,
     any_text,
     boolean,
@@ -37,6 +38,7 @@ ALGORITHMS = {"PPO": "stable_baselines3", "SAC": "stable_baselines3", "TD3": "st
 MAX_FRAME_STACK = 10_000
 
 _RATE = number(low=0.0, high=1.0)
+_ROW_KEYS = ("episode", "success", "cost")
 _COST = number(nullable=True)
 
 
@@ -53,6 +55,15 @@ def _figures(where: Where, data: Any, *, gap: bool) -> dict[str, Any]:
     return out
 
 
+def _score_row(value: Any) -> dict[str, Any]:
+    """One episode row of a suite entry, as the failure-aware score reads it."""
+    row = table(value)
+    if set(_ROW_KEYS) - set(row):
+        raise Invalid("a table with " + ", ".join(_ROW_KEYS))
+    return {"episode": integer(0)(row["episode"]), "success": boolean(row["success"]),
+            "cost": number()(row["cost"])}
+
+
 def score_suite(where: Where, data: Any) -> dict[str, Any]:
     """One ``suites.NAME`` entry of a score file, as the board reads it."""
     data = where.check(data, table)
@@ -63,6 +74,11 @@ def score_suite(where: Where, data: Any) -> dict[str, Any]:
         out["reason"] = where.get(data, "reason", any_text, default="")
         return out
     out.update(_figures(where, data, gap=True))
+    if "score_mean" in data:            # files before the failure-aware score lack it: the board
+        out["score_mean"] = where.get(data, "score_mean", _COST)        # computes it from rows
+        out["score_ci"] = where.get(data, "score_ci", list_of(_COST, 2), default=[None, None])
+    if "rows" in data:
+        out["rows"] = where.get(data, "rows", list_of(_score_row))
     for key in ("reference", "full_state_bound"):
         out[key] = _figures(where.at(key), where.get(data, key, table), gap=False)
     return out
@@ -78,6 +94,8 @@ def score_file(path: str | os.PathLike[str]) -> dict[str, Any]:
     suites = where.get(data, "suites", table)
     return {"policy": where.get(data, "policy", text),
             "kind": where.get(data, "kind", any_text, default=""),
+            "method": where.get(data, "method", text, default=None),
+            "seed": where.get(data, "seed", integer(0), default=None),
             "suites": {name: score_suite(where.at("suites").at(name), entry)
                        for name, entry in suites.items()}}
 
@@ -107,7 +125,10 @@ def training_record(path: str | os.PathLike[str], *, where_text: str) -> dict[st
         raise where.error(f"at most {MAX_FRAME_STACK:,} (observations the agent keeps), got "
                           f"{frames:,}", "frame_stack")
     return {"algo": where.get(data, "algo", one_of(tuple(ALGORITHMS))),
+            "method": where.get(data, "method", text, default=None),
+            "seed": where.get(data, "seed", integer(0), default=None),
             "frame_stack": frames,
+            "past_actions": where.get(data, "past_actions", boolean, default=False),
             "obs_norm": _obs_norm(where.at("obs_norm"), data.get("obs_norm")),
             "normalize_action": where.get(data, "normalize_action", boolean, default=False),
             "env": dict(env), "budget": data.get("budget")}

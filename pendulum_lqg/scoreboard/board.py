@@ -1,7 +1,16 @@
 """The leaderboard: a folder of score files (``pendulum-lqg score … --out FILE``) as one Markdown table.
 
 One row per entry, one column group per suite — success rate, mean J of the successes, optimality
-gap to the suite's reference — and a row per suite's reference and full-state bound underneath.
+gap to the suite's reference, failure-aware score (:mod:`pendulum_lqg.scoreboard.stats`) — and a
+row per suite's reference and full-state bound underneath. A score file made before the
+failure-aware score has no ``score_mean``: the board computes it from the entry's ``rows`` and the
+rows of the suite's reference in its own score file in the folder (``n/a`` without one).
+
+Score files that carry a ``method`` (the training runs of one method, one file per training seed:
+``benchmarks/train_agents.py`` writes the method and seed into the training record, and ``score
+--agent sb3:MODEL.zip`` copies them) are also aggregated in a second table, one row per method:
+per suite, the interquartile mean over the runs of the success rate and of the failure-aware
+score, each with its stratified bootstrap 95 % interval (:func:`~pendulum_lqg.scoreboard.stats.aggregate`).
 Entries are compared on a suite only when their suite fingerprints match the board's (the most
 common one): a score made on another version of a suite, or with another episode count, is listed
 under "Not comparable" instead of in the table.
@@ -14,9 +23,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from pendulum_lqg.boundary.schemas import SCORE_VERSION, score_file
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.scoreboard.stats import aggregate, failure_aware_figures
 from pendulum_lqg.scoreboard.suites import SUITE_ORDER
+
+Scores = list[tuple[Path, dict[str, Any]]]
 
 
 def read_scores(folder: Path, *, skipped: list[str] | None = None,
@@ -68,6 +82,101 @@ def _gap(entry: dict[str, Any]) -> str:
     return f"{gap:+.2f}{ci}"
 
 
+def _score(entry: dict[str, Any]) -> str:
+    mean = entry.get("score_mean")
+    if mean is None:
+        return "n/a"
+    lo, hi = entry.get("score_ci", [None, None])
+    return f"{mean:.2f}" + ("" if lo is None else f" [{lo:.2f}, {hi:.2f}]")
+
+
+def _with_scores(scores: Scores, prints: dict[str, str]) -> None:
+    """Give every comparable entry without a ``score_mean`` the one its rows and its reference's
+    rows give (see the module docstring); ``None`` where either is missing."""
+    reference_rows: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for _, d in scores:
+        for s, e in d["suites"].items():
+            if e.get("fingerprint") == prints.get(s) and e.get("applicable", True) and "rows" in e:
+                reference_rows.setdefault((s, d["policy"]), e["rows"])
+    for _, d in scores:
+        for s, e in d["suites"].items():
+            if "score_mean" in e or not e.get("applicable", True) or e["fingerprint"] != prints[s]:
+                continue
+            ref = reference_rows.get((s, e["reference"]["policy"]))
+            try:
+                e.update(failure_aware_figures(e["rows"], ref) if ref and "rows" in e
+                         else {"score_mean": None, "score_ci": [None, None]})
+            except ValueError:          # an episode the reference's file does not have
+                e.update({"score_mean": None, "score_ci": [None, None]})
+
+
+def _aggregate(values: list[float | None], fmt: Callable[[float], str]) -> str:
+    if not values:
+        return ""
+    if any(v is None for v in values):
+        return "n/a"
+    agg = aggregate(np.array(values, dtype=float))
+    lo, hi = agg["iqm_ci"]
+    return f"{fmt(agg['iqm'])} [{fmt(lo)}, {fmt(hi)}]"
+
+
+def methods_table(scores: Scores, suites: list[str], prints: dict[str, str]) -> list[str]:
+    """The lines of the methods table (empty without a score file that names its ``method``):
+    per method and suite, the IQM over its runs of success and failure-aware score, with their
+    stratified bootstrap 95 % intervals. A second file of the same method and seed is not
+    counted twice: it is named in a note under the table."""
+    runs: dict[str, dict[int | str, dict[str, Any]]] = {}
+    repeated: list[str] = []
+    for path, d in sorted(scores, key=lambda item: item[0].name):
+        if d.get("method") is None:
+            continue
+        seeds = runs.setdefault(d["method"], {})
+        if d["seed"] in seeds:
+            repeated.append(f"{path.name} (`{d['method']}` seed {d['seed']})")
+            continue
+        seeds[path.name if d["seed"] is None else d["seed"]] = d
+    if not runs:
+        return []
+    head = ["method", "runs (seeds)"] + [f"{_md(s)}: {c}" for s in suites for c in ("success",
+                                                                                  "score")]
+    lines = ["", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for method, seeds in sorted(runs.items()):
+        listed = ", ".join(str(k) for k in sorted(k for k in seeds if isinstance(k, int)))
+        cells = [f"`{_md(method)}`", f"{len(seeds)}" + (f" ({listed})" if listed else "")]
+        for s in suites:
+            entries = [d["suites"][s] for d in seeds.values() if s in d["suites"]
+                       and d["suites"][s]["fingerprint"] == prints[s]
+                       and d["suites"][s].get("applicable", True)]
+            cells += [_aggregate([e["success_rate"] for e in entries], lambda v: f"{100 * v:.0f} %"),
+                      _aggregate([e["score_mean"] for e in entries], lambda v: f"{v:.2f}")]
+        lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "Methods: the runs of one method (score files with the same `method`, one per "
+              "training seed). Per suite, the interquartile mean over the runs of the success rate "
+              "and of the failure-aware score, each with its 95 % stratified bootstrap interval "
+              "over runs (2 000 resamples)."]
+    if repeated:
+        lines += ["", "Counted once (the same method and seed again): " + "; ".join(repeated) + "."]
+    return lines
+
+
+def _reference_lines(scores: Scores, suites: list[str], prints: dict[str, str]) -> list[str]:
+    """The rows of each suite's reference and full-state bound (from any comparable entry)."""
+    lines = []
+    for label, key in (("reference", "reference"), ("full-state bound", "full_state_bound")):
+        cells = [label, ""]
+        for s in suites:
+            e = next((d["suites"][s] for _, d in scores
+                      if s in d["suites"] and d["suites"][s]["fingerprint"] == prints[s]
+                      and d["suites"][s].get("applicable", True)), None)
+            if e is None:
+                cells += ["", "", "", ""]
+                continue
+            ref = e[key]
+            cells += [_pct(ref["success_rate"]), _num(ref["cost_mean"]), f"`{ref['policy']}`", ""]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
 def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> str:
     """The Markdown board of the score files in ``folder``. Damaged files are skipped and listed
     under the table (and each reported to ``warn``, one line; see :func:`read_scores`)."""
@@ -80,7 +189,9 @@ def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> st
     suites = [n for n in SUITE_ORDER if n in names] + sorted(names - set(SUITE_ORDER))
     prints = {s: Counter(d["suites"][s]["fingerprint"] for _, d in scores if s in d["suites"])
               .most_common(1)[0][0] for s in suites}
-    head = ["entry", "kind"] + [f"{_md(s)}: {c}" for s in suites for c in ("success", "J", "gap")]
+    _with_scores(scores, prints)
+    head = ["entry", "kind"] + [f"{_md(s)}: {c}" for s in suites
+                                for c in ("success", "J", "gap", "score")]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     stale: list[str] = []
     for path, d in sorted(scores, key=lambda item: item[1]["policy"]):
@@ -88,28 +199,17 @@ def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> st
         for s in suites:
             e = d["suites"].get(s)
             if e is not None and not e.get("applicable", True):
-                cells += ["n/a", "", ""]
+                cells += ["n/a", "", "", ""]
                 continue
             if e is None or e.get("fingerprint") != prints[s]:
                 if e is not None:
                     stale.append(f"`{d['policy']}` on `{s}` ({path.name}: suite fingerprint "
                                  f"{str(e.get('fingerprint'))[:12]}…)")
-                cells += ["", "", ""]
+                cells += ["", "", "", ""]
                 continue
-            cells += [_pct(e["success_rate"]), _num(e["cost_mean"]), _gap(e)]
+            cells += [_pct(e["success_rate"]), _num(e["cost_mean"]), _gap(e), _score(e)]
         lines.append("| " + " | ".join(cells) + " |")
-    for label, key in (("reference", "reference"), ("full-state bound", "full_state_bound")):
-        cells = [label, ""]
-        for s in suites:
-            e = next((d["suites"][s] for _, d in scores
-                      if s in d["suites"] and d["suites"][s]["fingerprint"] == prints[s]
-                      and d["suites"][s].get("applicable", True)), None)
-            if e is None:
-                cells += ["", "", ""]
-                continue
-            ref = e[key]
-            cells += [_pct(ref["success_rate"]), _num(ref["cost_mean"]), f"`{ref['policy']}`"]
-        lines.append("| " + " | ".join(cells) + " |")
+    lines += _reference_lines(scores, suites, prints)
     episodes = {s: next(d["suites"][s]["episodes"] for _, d in scores
                         if s in d["suites"] and d["suites"][s]["fingerprint"] == prints[s])
                 for s in suites}
@@ -117,7 +217,10 @@ def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> st
               + ". Success: share of episodes without a failure; J: mean cost of the successful "
               "episodes; gap: mean J over the episodes both the entry and the suite's reference "
               "survived, divided by the reference's, minus one, with its 95 % paired bootstrap "
-              "interval."]
+              "interval; score: the failure-aware score, the mean over all episodes of J_ref / J "
+              "(0 for a failed episode; 1 = the reference), with its 95 % bootstrap interval "
+              "over episodes (n/a: no rows of the suite's reference in the folder)."]
+    lines += methods_table(scores, suites, prints)
     if stale:
         lines += ["", "Not comparable (another suite version or episode count): "
                   + "; ".join(stale) + "."]

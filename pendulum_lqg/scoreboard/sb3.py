@@ -4,18 +4,22 @@ A model is a zip saved by stable-baselines3 with a JSON file beside it, ``PATH.j
 it was trained (the training script writes it)::
 
     {"algo": "PPO",                  # PPO, SAC, TD3, A2C (stable-baselines3), RecurrentPPO (sb3-contrib)
-     "frame_stack": 8,               # VecFrameStack's n_stack (1: none)
+     "method": "ppo-history", "seed": 3,   # the run: a method and its training seed (optional)
+     "frame_stack": 8,               # frames of the history (1: none)
+     "past_actions": true,           # each frame is [y, previous action] (default false)
      "obs_norm": {"mean": [...], "var": [...], "clip": 10.0, "epsilon": 1e-8},  # of the stack, or null
      "normalize_action": false,      # trained on actions in [−1, 1]
      "env": {...},                   # the env keywords it was trained on
      "budget": {...}}                # steps, seeds, wall time
 
-:class:`SB3Agent` replays the training-time wrappers ``VecNormalize(VecFrameStack(env))`` for one
-env — the frame stack (newest frame last, zeros before the first, as ``VecFrameStack``), then the
-normalisation of the stacked observation with the frozen statistics — and asks the model's
-``predict`` for a deterministic action, carrying a recurrent policy's state across the episode.
-A sample that is lost or not yet delivered (``nan``, under ``dropout`` or a measurement delay) is
-replaced by the last one received (zeros before the first): the networks never saw a nan.
+:class:`SB3Agent` rebuilds the observation design of the record for one env
+(:mod:`pendulum_lqg.scoreboard.obs_design`: the history of frames, newest last, zeros before the
+first, each frame the observation and, with ``past_actions``, the previous action; then the
+normalisation of the stack with the frozen statistics), the same code the training wrapper runs,
+and asks the model's ``predict`` for a deterministic action, carrying a recurrent policy's state
+across the episode. A sample that is lost or not yet delivered (``nan``, under ``dropout`` or a
+measurement delay) is replaced by the last one received (zeros before the first): the networks
+never saw a nan.
 Nothing here imports torch until a model is loaded.
 """
 
@@ -29,51 +33,43 @@ import numpy as np
 
 from pendulum_lqg.boundary.schemas import ALGORITHMS, training_record
 from pendulum_lqg.errors import ConfigError, NotApplicable, PluginError
+from pendulum_lqg.scoreboard.obs_design import ObservationDesign, ObservationHistory, normalise
 
 
 class SB3Agent:
     """A model with stable-baselines3's ``predict(observation, state, episode_start,
-    deterministic)`` as an agent of one env (see the module docstring)."""
+    deterministic)`` as an agent of one env, seeing the observation design it was trained on
+    (:mod:`pendulum_lqg.scoreboard.obs_design`; ``low``/``high``: the env's action bounds, which
+    clip the previous action of a ``past_actions`` design)."""
 
     def __init__(self, model: Any, *, frame_stack: int = 1,
-                 obs_norm: dict[str, Any] | None = None) -> None:
-        if isinstance(frame_stack, bool) or not isinstance(frame_stack, int) or frame_stack < 1:
-            raise ConfigError(f"frame_stack: expected a positive integer, got {frame_stack!r}")
-        self.model, self.frame_stack = model, frame_stack
-        self.obs_norm = None
-        if obs_norm is not None:
-            self.obs_norm = (np.asarray(obs_norm["mean"], dtype=float),
-                             np.sqrt(np.asarray(obs_norm["var"], dtype=float)
-                                     + float(obs_norm.get("epsilon", 1e-8))),
-                             float(obs_norm.get("clip", 10.0)))
-        self._stack: np.ndarray | None = None
-        self._held = np.zeros(0)
+                 obs_norm: dict[str, Any] | None = None, past_actions: bool = False,
+                 low: Any = -np.inf, high: Any = np.inf) -> None:
+        self.model, self.obs_norm = model, obs_norm
+        self.design = ObservationDesign(frame_stack, past_actions)
+        self.frame_stack = frame_stack
+        self._bounds = (low, high)
+        self._history: ObservationHistory | None = None
+        self._action: np.ndarray | None = None
         self._state: Any = None
-        self._start = True
 
     def reset(self) -> None:
-        self._stack, self._state, self._start = None, None, True
+        self._history, self._action, self._state = None, None, None
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        obs = np.asarray(observation, dtype=float)
-        if self._stack is None:
-            self._stack = np.zeros(obs.size * self.frame_stack)
-            self._held = np.zeros(obs.size)
-        if np.all(np.isfinite(obs)):
-            self._held = obs
-        else:                    # a lost or not yet delivered sample (nan): hold the last one
-            obs = self._held
-        self._stack = np.roll(self._stack, -obs.size)
-        self._stack[-obs.size:] = obs
-        seen = self._stack
-        if self.obs_norm is not None:
-            mean, std, clip = self.obs_norm
-            seen = np.clip((seen - mean) / std, -clip, clip)
+        obs = np.asarray(observation, dtype=float).reshape(1, -1)
+        start = self._history is None
+        if self._history is None:
+            self._history = ObservationHistory(self.design, 1, obs.shape[1], *self._bounds)
+            stack = self._history.reset(obs)
+        else:
+            assert self._action is not None
+            stack = self._history.step(obs, self._action)
         action, self._state = self.model.predict(
-            seen[None, :], state=self._state,
-            episode_start=np.array([self._start]), deterministic=True)
-        self._start = False
-        return np.asarray(action, dtype=float).reshape(1)
+            normalise(stack, self.obs_norm), state=self._state,
+            episode_start=np.array([start]), deterministic=True)
+        self._action = np.asarray(action, dtype=float).reshape(1, -1)
+        return self._action.reshape(-1)[:1].copy()
 
 
 def read_metadata(path: Path) -> dict[str, Any]:
@@ -101,24 +97,61 @@ def load_model(path: Path, algo: str) -> Any:
                           f"{' '.join(str(exc).split())[:200]}") from exc
 
 
-def sb3_agent(path_text: str) -> Any:
-    """The agent factory of ``sb3:PATH.zip``; its ``normalize_action`` attribute tells the score
-    which action space the model was trained on."""
+class SB3Factory:
+    """The agent factory of ``sb3:PATH.zip``: ``factory(env)`` is an :class:`SB3Agent` of the
+    model. ``normalize_action`` tells the score which action space the model was trained on;
+    ``run`` (``method``, ``seed``, ``model_sha256``) and ``versions`` (torch, stable-baselines3,
+    sb3-contrib) go into the score file."""
+
+    def __init__(self, path_text: str, meta: dict[str, Any], model: Any) -> None:
+        self.path_text, self.meta, self.model = path_text, meta, model
+        self.normalize_action: bool = meta["normalize_action"]
+        self.env: dict[str, Any] = dict(meta["env"])
+        self.run: dict[str, Any] = {"model_sha256": file_sha256(Path(path_text))}
+        self.run.update({k: meta[k] for k in ("method", "seed") if meta.get(k) is not None})
+        self.versions = rl_versions()
+
+    def __call__(self, env: gym.Env) -> SB3Agent:
+        trained_on = self.env.get("observation_mode", "measurement")
+        mode = getattr(env.unwrapped, "observation_mode", None)
+        if mode != trained_on:
+            raise NotApplicable(f"agent sb3:{self.path_text} was trained on observation_mode = "
+                                f"{trained_on!r}; this suite's env has {mode!r}")
+        space = env.action_space
+        return SB3Agent(self.model, frame_stack=self.meta["frame_stack"],
+                        obs_norm=self.meta["obs_norm"], past_actions=self.meta["past_actions"],
+                        low=getattr(space, "low", -np.inf), high=getattr(space, "high", np.inf))
+
+
+def file_sha256(path: Path) -> str:
+    """The sha256 of the file ``path`` (hex), read in 1 MiB chunks."""
+    import hashlib
+
+    digest = hashlib.sha256()
+    with path.open("rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def rl_versions() -> dict[str, str]:
+    """The installed versions of the RL libraries a model's score depends on (``"absent"``: not
+    installed), read from the package metadata without importing them."""
+    from importlib import metadata
+
+    out = {}
+    for lib in ("torch", "stable-baselines3", "sb3-contrib"):
+        try:
+            out[lib] = metadata.version(lib)
+        except metadata.PackageNotFoundError:
+            out[lib] = "absent"
+    return out
+
+
+def sb3_agent(path_text: str) -> SB3Factory:
+    """The agent factory of ``sb3:PATH.zip`` (see :class:`SB3Factory`)."""
     path = Path(path_text)
     if not path.is_file():
         raise ConfigError(f"agent: sb3:{path_text}: no such model file")
     meta = read_metadata(path)
-    model = load_model(path, meta["algo"])
-
-    trained_on = meta["env"].get("observation_mode", "measurement")
-
-    def factory(env: gym.Env) -> SB3Agent:
-        mode = getattr(env.unwrapped, "observation_mode", None)
-        if mode != trained_on:
-            raise NotApplicable(f"agent sb3:{path_text} was trained on observation_mode = "
-                                f"{trained_on!r}; this suite's env has {mode!r}")
-        return SB3Agent(model, frame_stack=meta["frame_stack"], obs_norm=meta["obs_norm"])
-
-    factory.normalize_action = meta["normalize_action"]     # type: ignore[attr-defined]
-    factory.env = dict(meta["env"])                         # type: ignore[attr-defined]
-    return factory
+    return SB3Factory(path_text, meta, load_model(path, meta["algo"]))

@@ -13,6 +13,11 @@ Per suite, over its ``episodes`` fixed seeds (the same episodes for every entry)
   survivor the gap is ``null``. Its 95 % interval is a paired bootstrap over ``S`` (the same
   resampled episodes for both; 2 000 resamples, a fixed seed, so it is reproducible). The
   reference's gap to itself is exactly 0 (the same rows, the same sums).
+* **failure-aware score** — per episode ``J_ref / J`` if the entry survived, 0 if it failed
+  (:func:`pendulum_lqg.scoreboard.stats.failure_aware_scores`); ``score_mean`` is its mean over
+  the suite's episodes, ``score_ci`` its 95 % bootstrap interval over the episodes. Unlike the
+  gap it counts failures, so it compares entries whose success rates differ: 1 is the
+  reference, 0 every episode failed.
 * **full-state bound** — the full-state LQR (``dlqr+none``, observing the true state without
   noise) on the same seeds: its success rate and mean J say what observation costs, the floor no
   estimator reaches.
@@ -32,6 +37,7 @@ import numpy as np
 from pendulum_lqg.boundary.schemas import SCORE_VERSION
 from pendulum_lqg.core.metrics import mean_se, wilson_interval
 from pendulum_lqg.errors import NotApplicable, PendulumLQGError
+from pendulum_lqg.scoreboard.stats import failure_aware_figures
 from pendulum_lqg.scoreboard.suites import Suite
 
 __all__ = ["SCORE_VERSION", "optimality_gap", "score_document", "score_entry", "success_figures",
@@ -75,7 +81,8 @@ def suite_score(suite: Suite, rows: Sequence[dict[str, Any]], reference: Sequenc
     """One suite's entry of a score file (see :func:`score_document`)."""
     if [r["episode"] for r in rows] != list(range(suite.episodes)):
         raise ValueError(f"suite {suite.name!r}: the rows are not episodes 0 … {suite.episodes - 1}")
-    out = {**success_figures(rows), **optimality_gap(rows, reference)}
+    out = {**success_figures(rows), **optimality_gap(rows, reference),
+           **failure_aware_figures(rows, reference)}
     ref = success_figures(reference)
     out["reference"] = {"policy": suite.reference, "success_rate": ref["success_rate"],
                         "cost_mean": ref["cost_mean"]}
@@ -93,13 +100,16 @@ def score_document(policy: str, kind: str, suites: Sequence[Suite],
                    reference_of: Callable[[Suite], list[dict[str, Any]]],
                    bound_of: Callable[[Suite], list[dict[str, Any]]],
                    versions: dict[str, str],
-                   on_suite: Callable[[str], None] | None = None) -> dict[str, Any]:
+                   on_suite: Callable[[str], None] | None = None,
+                   run: dict[str, Any] | None = None) -> dict[str, Any]:
     """The score file of ``policy``: ``{"policy", "kind", "score_version", "versions", "suites":
     {name: {"applicable", "episodes", "success_rate", "success_ci", "cost_mean", "cost_se",
-    "optimality_gap", "gap_ci", "gap_episodes", "reference", "full_state_bound", "version",
-    "fingerprint", "rows"}}}``; a suite the entry cannot play as posed
-    (:class:`~pendulum_lqg.scoreboard.episodes.NotApplicable`) has ``"applicable": false`` and the
-    ``"reason"`` instead of the figures. ``kind`` is ``"builtin"``, ``"plugin"`` or ``"agent"``;
+    "optimality_gap", "gap_ci", "gap_episodes", "score_mean", "score_ci", "reference",
+    "full_state_bound", "version", "fingerprint", "rows"}}}``, and the ``run`` keys (``method``,
+    ``seed``: one training run of a method, which ``board`` aggregates) where given; a suite the
+    entry cannot play as posed (:class:`~pendulum_lqg.scoreboard.episodes.NotApplicable`) has
+    ``"applicable": false`` and the ``"reason"`` instead of the figures. ``kind`` is
+    ``"builtin"``, ``"plugin"`` or ``"agent"``;
     ``on_suite(name)`` is told when each suite is done (progress)."""
     entries: dict[str, Any] = {}
     for s in suites:
@@ -121,7 +131,7 @@ def score_document(policy: str, kind: str, suites: Sequence[Suite],
         if on_suite is not None:
             on_suite(s.name)
     return {"policy": policy, "kind": kind, "score_version": SCORE_VERSION, "versions": versions,
-            "suites": entries}
+            **(run or {}), "suites": entries}
 
 
 def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: str | None = None,
@@ -165,23 +175,48 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
             f"agent {agent!r}", "reading normalize_action",
             lambda: bool(getattr(factory, "normalize_action", False)))
         name, kind = agent, "agent"
-
-        def rows_of(s: Suite) -> list[dict[str, Any]]:
-            return ep.agent_rows(s, factory, name=agent, normalize_action=normalized)
+        run, extra_versions = _run_of(factory)
+        rows_of = _agent_rows_of(agent, factory, normalized)
     else:
         assert policy is not None
         if not policy:
             raise ConfigError("policy: expected 'controller+observer' or a plug-in MODULE:ATTR, "
                               "got ''")
         name, kind = policy, ("plugin" if is_plugin_ref(policy) else "builtin")
+        run, extra_versions = _run_of(None)
 
         def rows_of(s: Suite) -> list[dict[str, Any]]:
             if kind == "builtin" and policy == s.reference:   # the reference itself: one run
                 return reference_of(s)
             return ep.policy_rows(s, policy, base_dir=base_dir, nthread=nthread)
 
-    return score_document(name, kind, suites, rows_of, reference_of, bound_of, versions(),
-                          on_suite)
+    return score_document(name, kind, suites, rows_of, reference_of, bound_of,
+                          {**versions(), **extra_versions}, on_suite, run)
+
+
+def _run_of(factory: Any) -> tuple[dict[str, Any] | None, dict[str, str]]:
+    """An sb3 model's run (method, seed, the model's sha256) and its libraries' versions."""
+    from pendulum_lqg.scoreboard.sb3 import SB3Factory
+
+    if isinstance(factory, SB3Factory):
+        return factory.run, factory.versions
+    return None, {}
+
+
+def _agent_rows_of(agent: str, factory: Any, normalized: bool,
+                   ) -> Callable[[Suite], list[dict[str, Any]]]:
+    """The rows of an agent on a suite: an sb3 model batched (all episodes at once, one predict
+    per control period), any other agent one episode after another."""
+    from pendulum_lqg.scoreboard import episodes as ep
+    from pendulum_lqg.scoreboard.sb3 import SB3Factory
+
+    def rows_of(s: Suite) -> list[dict[str, Any]]:
+        if isinstance(factory, SB3Factory):
+            from pendulum_lqg.scoreboard.sb3_batch import batched_rows
+
+            return batched_rows(s, factory, normalize_action=normalized)
+        return ep.agent_rows(s, factory, name=agent, normalize_action=normalized)
+    return rows_of
 
 
 def _finite(value: float) -> float | None:

@@ -60,6 +60,21 @@ def failure_aware_scores(rows: Sequence[dict[str, Any]],
     return out
 
 
+def failure_aware_figures(rows: Sequence[dict[str, Any]],
+                          reference: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """A suite entry's ``score_mean`` — the mean of :func:`failure_aware_scores` over its episodes —
+    and ``score_ci``, its 95 % percentile bootstrap interval over the episodes
+    (:data:`BOOTSTRAP_RESAMPLES` resamples, :data:`BOOTSTRAP_SEED`: reproducible). Both are
+    ``None`` where the score is undefined (the reference survived no episode, or no rows)."""
+    if not rows or not any(r["success"] for r in reference):
+        return {"score_mean": None, "score_ci": [None, None]}
+    s = failure_aware_scores(rows, reference)
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    means = s[rng.integers(0, s.size, size=(BOOTSTRAP_RESAMPLES, s.size))].mean(axis=1)
+    lo, hi = np.percentile(means, [2.5, 97.5])
+    return {"score_mean": float(s.mean()), "score_ci": [float(lo), float(hi)]}
+
+
 def as_runs_by_suites(scores: Any) -> np.ndarray:
     """``scores`` as a float ``(runs, suites)`` array; a 1-D array is one suite's runs."""
     x = np.asarray(scores, dtype=float)

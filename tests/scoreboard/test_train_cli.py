@@ -1,0 +1,54 @@
+"""benchmarks/train_agents.py's command line without the rl extra: the methods list, the run's
+file names and the refusal of bad numbers (nothing is trained here)."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def train_agents():
+    spec = importlib.util.spec_from_file_location("train_agents_cli",
+                                                  ROOT / "benchmarks" / "train_agents.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["train_agents_cli"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_list_names_every_method_with_its_budget(train_agents, capsys):
+    assert train_agents.main(["--list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in lines] == list(train_agents.METHODS)
+    assert any(line.startswith("ppo-history") and "1,000,000 steps" in line for line in lines)
+    assert train_agents.run_name("sac-history", 4) == "sac-history-seed4"
+
+
+def test_the_methods_declare_designs_the_scorer_can_rebuild(train_agents):
+    from pendulum_lqg.boundary.schemas import ALGORITHMS
+    from pendulum_lqg.scoreboard.obs_design import ObservationDesign
+    from pendulum_lqg.scoreboard.suites import load_suite
+
+    for m in train_agents.METHODS.values():
+        assert m.algo in ALGORITHMS and load_suite(m.suite).name == m.suite
+        ObservationDesign(m.frame_stack, m.past_actions)          # valid, or ConfigError
+    suite = train_agents.eval_suite(load_suite("lecture"))
+    assert (suite.seed, suite.episodes) == (train_agents.EVAL_SEED, 20)
+    assert suite.seed != load_suite("lecture").seed                # never a suite's episodes
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["ppo-history", "--seed", "-1"], "--seed: expected a non-negative integer, got -1"),
+    (["ppo-history", "--steps", "0"], "--steps: expected a positive integer, got 0"),
+    (["ppo-history", "--eval-every", "0"], "--eval-every: expected a positive integer, got 0"),
+])
+def test_bad_numbers_exit_2_with_one_line(train_agents, capsys, args, message):
+    with pytest.raises(SystemExit) as exc:
+        train_agents.main(args)
+    assert exc.value.code == 2 and message in capsys.readouterr().err
