@@ -21,6 +21,9 @@ Usage::
     uv run python benchmarks/instructions.py env [--steps 1000] [--tree PATH]
     uv run python benchmarks/instructions.py vector [--steps 100]
     uv run python benchmarks/instructions.py loop [--episodes 64]
+    uv run python benchmarks/instructions.py env --public   # DIRECT_CALL off: the public rollout
+    uv run python benchmarks/instructions.py env --out env.callgrind   # keep the profile, then
+    callgrind_annotate --inclusive=yes env.callgrind | head -60         # per-function counts
 
 It needs ``valgrind`` on the PATH (``apt-get install valgrind``); a run takes a minute or two.
 """
@@ -36,7 +39,7 @@ import sys
 import tempfile
 
 
-def workload(kind: str, count: int) -> None:
+def workload(kind: str, count: int, public: bool = False) -> None:
     """Run the workload, counting only its timed part (called inside Valgrind)."""
     import gymnasium as gym
     import numpy as np
@@ -51,6 +54,8 @@ def workload(kind: str, count: int) -> None:
         env = gym.make(pendulum_lqg.ENV_ID)
         env.reset(seed=1)
         sim = env.unwrapped._sim
+        if public:                      # the public Batch.rollout instead of DIRECT_CALL's core
+            sim._physics.direct_call = False
         action = np.array([0.1])
 
         def run(n: int) -> None:
@@ -89,12 +94,17 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=None, help="env or vector steps (1000 / 100)")
     ap.add_argument("--episodes", type=int, default=64, help="loop: episodes")
     ap.add_argument("--tree", default=None, help="a checkout whose pendulum_lqg to run")
+    ap.add_argument("--public", action="store_true",
+                    help="env: the period through the public Batch.rollout, not DIRECT_CALL's "
+                         "direct call of its C++ core (the two counted against each other)")
+    ap.add_argument("--out", default=None,
+                    help="keep callgrind's profile in this file (for callgrind_annotate)")
     ap.add_argument("--inner", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     count = args.episodes if args.kind == "loop" else (args.steps or
                                                        (1000 if args.kind == "env" else 100))
     if args.inner:
-        workload(args.kind, count)
+        workload(args.kind, count, args.public)
         return
     if shutil.which("valgrind") is None:
         sys.exit("instructions: valgrind is not on the PATH (apt-get install valgrind)")
@@ -102,9 +112,11 @@ def main() -> None:
     if args.tree:
         env["PYTHONPATH"] = os.path.abspath(args.tree)
     with tempfile.TemporaryDirectory() as tmp:
+        profile = os.path.abspath(args.out) if args.out else f"{tmp}/callgrind.out"
         cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no",
-               f"--callgrind-out-file={tmp}/callgrind.out", sys.executable, os.path.abspath(__file__),
-               args.kind, "--inner", "--steps", str(count), "--episodes", str(count)]
+               f"--callgrind-out-file={profile}", sys.executable, os.path.abspath(__file__),
+               args.kind, "--inner", "--steps", str(count), "--episodes", str(count),
+               *(["--public"] if args.public else [])]
         done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
     found = re.search(r"I\s+refs:\s+([\d,]+)", done.stderr)
     if done.returncode != 0 or found is None:
@@ -112,7 +124,8 @@ def main() -> None:
     total = int(found.group(1).replace(",", ""))
     what = {"env": "env.step", "vector": "vector step (64 envs, with the agent)",
             "loop": "episode (2 s, DLQR + Kalman, one thread)"}[args.kind]
-    print(f"{args.kind}: {total / count / 1e3:,.1f} k instructions per {what} "
+    via = " through the public Batch.rollout" if args.public else ""
+    print(f"{args.kind}: {total / count / 1e3:,.1f} k instructions per {what}{via} "
           f"({total:,} over {count}; package from {args.tree or 'this checkout'})")
 
 

@@ -107,3 +107,31 @@ def test_envs_and_core_import_no_design_code_or_python_control():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
                          check=True).stdout.strip()
     assert out == "[]", out
+
+
+#: Libraries that cost seconds to import (python-control pulls in scipy.signal, scipy.stats and
+#: matplotlib.pyplot): only the functions that need them import them.
+HEAVY = ("control", "cvxpy", "scipy.signal", "scipy.stats", "matplotlib", "torch", "ray")
+
+
+def test_start_up_imports_no_heavy_library():
+    """A fresh interpreter that imports the package, every CLI module, the envs and the agent, and
+    designs the default policy (what ``gym.make``, a Ray worker or ``pendulum-lqg run`` does),
+    has loaded none of :data:`HEAVY`; a design that does need one (a pole placement) loads it."""
+    code = (
+        "import sys, pendulum_lqg, pendulum_lqg.cli, pendulum_lqg.cli.commands, "
+        "pendulum_lqg.cli.design, pendulum_lqg.cli.parser, pendulum_lqg.envs, pendulum_lqg.agent, "
+        "pendulum_lqg.policy, pendulum_lqg.design\n"
+        "from pendulum_lqg.plant import load_plant\n"
+        "from pendulum_lqg.policy import DesignSpec, design_policy\n"
+        "from pendulum_lqg.core.noise import NoiseModel\n"
+        "design_policy(load_plant(), 0.01, NoiseModel(), DesignSpec('dlqr', 'kalman'))\n"
+        f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))\n"
+        "from pendulum_lqg.design import luenberger\n"
+        "luenberger([[0.0, 1.0], [0.0, 0.0]], [[1.0, 0.0]], [-1.0, -2.0])\n"
+        "print('scipy.signal' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["[]", "True"], out.stdout + out.stderr

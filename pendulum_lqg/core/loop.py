@@ -283,19 +283,23 @@ class Simulator:
         v, _, reset = self._advance(self._u1)
         _, reason, fail_step = rules.detect_failure(
             v, reset, theta_max=self.scenario.theta_max, track_limit=self.track)
-        if fail_step is None:
-            cost = float(rules.period_cost(v.z, self.weights)[0])
+        if fail_step is None:                           # no row failed: the reason is FAIL_NONE
+            cost, code = rules.period_cost(v.z, self.weights).item(), rules.FAIL_NONE
         else:
             cost = float(rules.period_integrals(v.z, fail_step, h=self.h, weights=self.weights)[2][0])
-        self.t[0] += self.dt
-        self.period[0] += 1
-        self.x[...] = v.end
-        return cost, int(reason[0]), u
+            code = int(reason[0])
+        self.t[0] = self.t.item(0) + self.dt          # the float64 sum of t[0] += dt, in Python
+        self.period[0] = self.period.item(0) + 1
+        # The next period starts where this one ended: x becomes the buffer's start row itself,
+        # which _advance then need not fill (the values as in step: a copy of the end state).
+        v.start[...] = v.end
+        self.x = v.start
+        return cost, code, u
 
-    def _advance(self, requested: np.ndarray) -> tuple[PeriodView, np.ndarray, np.ndarray]:
+    def _advance(self, requested: np.ndarray) -> tuple[PeriodView, np.ndarray, np.ndarray | None]:
         """The period of every row with the saturated, finite forces ``requested`` (n,): actuation,
         physics and state noise into the period buffer. Returns its view, the command reaching
-        the actuator (n,) and the rows MuJoCo reset."""
+        the actuator (n,) and the rows MuJoCo reset (``None``: none)."""
         if self._physics is None or self._period is None:
             raise PendulumLQGError("simulator: closed (its physics threads were released by "
                                    "close()); make a new one")
@@ -305,7 +309,8 @@ class Simulator:
         command = requested
         if not self.sensing.plain_actuation:
             command, steps = self.sensing.actuate(requested, self.period)
-        v.start[...] = self.x
+        if self.x is not v.start:                     # step_one leaves x there (see step_one)
+            v.start[...] = self.x
         forces = self.noise.forces(self._w) if self._force_noise else None
         reset = self._physics.advance(self.x, command if steps is None else steps, forces, v)
         if steps is None:                              # after the physics (see PeriodView.direct)

@@ -157,7 +157,7 @@ class NoiseStream:
                                       self.meas_std])
         self._gens: list[np.random.Generator] = []
         self._chunk = CHUNK_PERIODS                          # periods per block
-        self._block = np.zeros((self._chunk, 0, self.width))
+        self._set_block(np.zeros((self._chunk, 0, self.width)))
         self._unit = np.empty((self._chunk, self.width))     # one episode's normals, as drawn
         self._pos = np.zeros(0, dtype=np.int64)
         self._cursor: int | None = self._chunk       # the common position, or None (per row)
@@ -191,7 +191,7 @@ class NoiseStream:
             self._horizon = None if horizon is None else max(1, int(horizon))
             self._chunk = (CHUNK_PERIODS if self._horizon is None
                            else min(CHUNK_PERIODS, self._horizon))
-            self._block = np.zeros((self._chunk, n, self.width))
+            self._set_block(np.zeros((self._chunk, n, self.width)))
             self._unit = np.empty((self._chunk, self.width))
             self._pos = np.full(n, self._chunk, dtype=np.int64)
             self._cursor = self._chunk
@@ -205,6 +205,21 @@ class NoiseStream:
             for r, g in zip(rows, generators, strict=True):
                 self._gens[r] = g
             self._pos[rows] = self._chunk
+
+    def _set_block(self, block: np.ndarray) -> None:
+        """The block of drawn noise (periods, rows, width) and its process and measurement parts,
+        views made once per block (a period's draw is then one index into each)."""
+        self._block = block
+        self._proc_block, self._meas_block = block[:, :, : self.n_proc], block[:, :, self.n_proc:]
+
+    def __getstate__(self) -> dict[str, object]:
+        state = dict(self.__dict__)
+        del state["_proc_block"], state["_meas_block"]     # views would pickle as copies
+        return state
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__dict__.update(state)
+        self._set_block(self._block)
 
     def _per_row(self) -> None:
         """Leave the common cursor: from now on each row keeps its own position."""
@@ -251,8 +266,7 @@ class NoiseStream:
             self._draw(np.flatnonzero(self._group == g).tolist(), drawn, stop)
             self._drawn[g] = stop
         self._period = p + 1
-        z = self._block[p % c]
-        return z[:, : self.n_proc], z[:, self.n_proc:]
+        return self._proc_block[p % c], self._meas_block[p % c]
 
     def draw(self, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The next period's noise of each row (default: every row), in physical units.
@@ -274,8 +288,7 @@ class NoiseStream:
                 self._draw(range(self.n), 0, c)
                 c = 0
             self._cursor = c + 1
-            z = self._block[c]
-            return z[:, : self.n_proc], z[:, self.n_proc:]
+            return self._proc_block[c], self._meas_block[c]
         self._per_row()
         every = rows is None            # every row at its own position: no gather of positions
         idx = np.arange(self.n) if rows is None else np.asarray(rows)
@@ -302,12 +315,12 @@ class NoiseStream:
         rows = np.asarray(rows)
         self._gens = [self._gens[r] for r in rows]
         if rows.size > 1 and np.any(np.diff(rows) <= 0):
-            self._block = self._block[:, rows]       # not increasing: plain copy
+            self._set_block(self._block[:, rows])    # not increasing: plain copy
         else:
             for i, r in enumerate(rows.tolist()):
                 if i != r:
                     self._block[:, i] = self._block[:, r]
-            self._block = self._block[:, : rows.size]
+            self._set_block(self._block[:, : rows.size])
         self._pos = self._pos[rows]
         if self._horizon is not None:
             self._group = self._group[rows]

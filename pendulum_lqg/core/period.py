@@ -28,6 +28,11 @@ def as_slice(values: np.ndarray) -> np.ndarray | slice:
     return values
 
 
+#: The fast failure check's masks up to this many numbers are tested by their bytes, larger ones
+#: by a reduction (:func:`~pendulum_lqg.core.rules.all_inside`; the faster way for each size).
+SMALL_MASK = 8192
+
+
 class PeriodBuffer:
     """The period buffer of a simulator with room for ``capacity`` rows (layout: module docstring).
 
@@ -64,7 +69,8 @@ class PeriodView:
     transpose); ``start``, ``last``, ``end`` (n, 4) the state at the start, after the k-th step
     and at the end of the period. For
     the fast failure check: ``flat`` the rows as one run of numbers, ``bounds`` a bound per
-    number, ``scratch`` and ``inside`` its work arrays. ``direct`` (1, k, 5), for one row only
+    number, ``scratch`` and ``inside`` its work arrays, ``small`` whether ``inside`` is at most
+    :data:`SMALL_MASK` long. ``direct`` (1, k, 5), for one row only
     (else ``None``): the buffer's numbers 4 … 4+5k−1, where a backend may record in place.
     """
 
@@ -78,6 +84,7 @@ class PeriodView:
         size = b.size
         self.flat, self.bounds = b.reshape(-1), period.bounds[:size]
         self.scratch, self.inside = period.scratch[:size], period.inside[:size]
+        self.small = size <= SMALL_MASK
         # One row: its u at step 0 and rows 1 … k are one C-contiguous run of 5k numbers, which
         # read as k records [·, p, θ, ṗ, θ̇] — a backend recording [time, qpos, qvel] after each
         # step can write them in place (the times land in the u column, overwritten by the loop).

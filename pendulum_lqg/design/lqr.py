@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import control
 import numpy as np
+import scipy.linalg
 from numpy.typing import ArrayLike
 
 from pendulum_lqg.design._checks import (
@@ -93,8 +93,10 @@ def lqr(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, *,
     Q, R, N = _weights(Q, R, N, *B.shape)
     require_stabilizable(A, B, discrete=False, names="(A, B)")
     require_cost_sees_marginal_modes(A, B, Q, R, N, discrete=False, names="A")
-    K, P, _ = control.lqr(A, B, Q, R, N)
-    K, P = np.asarray(K), np.asarray(P)
+    # The CARE with the cross weight, solved as python-control's lqr does without Slycot (the
+    # generalised form with E = I, so that the gains are the same to the last bit).
+    P = scipy.linalg.solve_continuous_are(A, B, Q, R, e=np.eye(A.shape[0]), s=N)
+    K = np.linalg.solve(R, B.T @ P + N.T)                              # K = R⁻¹(BᵀP + Nᵀ)
     poles = np.linalg.eigvals(A - B @ K)
     require_stable(poles, discrete=False, what="lqr")
     return LQRResult(K=K, P=P, poles=poles, discrete=False)
@@ -141,8 +143,9 @@ def dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: ArrayLike, *,
                          names="(Phi, Gamma)" if alpha == 1.0 else "(alpha·Phi, alpha·Gamma)")
     require_cost_sees_marginal_modes(Pa, Ga, Q, R, N, discrete=True,
                                      names="Phi" if alpha == 1.0 else "alpha·Phi")
-    K, P, _ = control.dlqr(Pa, Ga, Q, R, N)
-    K, P = np.asarray(K), np.asarray(P)
+    # The DARE with the cross weight, solved as python-control's dlqr does without Slycot.
+    P = scipy.linalg.solve_discrete_are(Pa, Ga, Q, R, s=N)
+    K = scipy.linalg.solve(Ga.T @ P @ Ga + R, Ga.T @ P @ Pa + N.T)      # (R + ΓᵀPΓ)⁻¹(ΓᵀPΦ + Nᵀ)
     require_stable(np.linalg.eigvals(Pa - Ga @ K), discrete=True, what="dlqr")
     poles = np.linalg.eigvals(Phi - Gamma @ K)
     return LQRResult(K=K, P=P, poles=poles, discrete=True)

@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-import control
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -48,9 +47,12 @@ def _place(A: np.ndarray, C: np.ndarray, poles: np.ndarray, what: str) -> np.nda
     if mult > rank:
         raise DesignError(f"poles: a pole is repeated {mult} times but rank C is only {rank} "
                           "(multiplicity must not exceed rank C)")
-    try:
-        L_r = np.asarray(control.place(A.T, C_r.T, poles)).T
-    except ValueError as exc:  # scipy.signal.place_poles reports numerical failures this way
+    # scipy.signal is heavy to import: only when an observer is placed
+    from scipy.signal import place_poles
+
+    try:       # Tits–Yang, as python-control's place (a wrapper of this call) uses
+        L_r = place_poles(A.T, C_r.T, poles, method="YT").gain_matrix.T
+    except ValueError as exc:  # place_poles reports numerical failures this way
         raise DesignError(f"poles: pole placement failed: {exc}") from exc
     return L_r @ U_r.T
 

@@ -149,7 +149,10 @@ def step_reward(cost: np.ndarray | np.float64 | float, failed: np.ndarray | bool
         if np.count_nonzero(failed):
             r[failed] = 0.0
         return r
-    return 0.0 if failed else max(float(r), REWARD_FLOOR)
+    if failed:
+        return 0.0
+    r = float(r)
+    return REWARD_FLOOR if REWARD_FLOOR > r else r       # max(r, floor) without the call
 
 
 def _action_force(action: object, n: int) -> np.ndarray:
@@ -213,12 +216,12 @@ class Actions:
     def force(self, action: object) -> float:
         """The requested force [N] of a single env's action (shape (1,))."""
         if type(action) is np.ndarray and action.shape == (1,) and action.dtype.kind == "f":
-            u = float(action[0])                               # the common case, kept cheap
+            u = action.item()                                  # the common case, kept cheap
             if not math.isfinite(u):
                 raise PendulumLQGError(f"action: expected finite forces, got {action!r}")
         else:
             u = float(_action_force(action, 1)[0])
-        return self._to_newtons(u)
+        return self._to_newtons(u) if self.normalize else u
 
     def forces(self, action: object, n: int) -> np.ndarray:
         return self._to_newtons(_action_force(action, n))

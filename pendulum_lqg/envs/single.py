@@ -210,7 +210,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
             obs = self._noise_free_observation()
         else:
             obs = self._observe()
-        truncated = int(sim.period[0]) >= sim.n_periods         # TimeLimit's rule
+        truncated = sim.period.item(0) >= sim.n_periods         # TimeLimit's rule
         return obs, reward, failed, truncated, self._info(cost, reason, force)
 
     def _observe(self) -> np.ndarray:
@@ -225,7 +225,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         state = self._sim.x[0].copy()
         return {"cost": cost, "running_cost": self._running_cost, "state": state,
                 "y_true": state[:2], "failure_reason": FAIL_REASONS[reason],
-                "time": float(self._sim.t[0]), "force": force}
+                "time": self._sim.t.item(0), "force": force}
 
     @property
     def normalize_action(self) -> bool:

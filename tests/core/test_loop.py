@@ -29,11 +29,15 @@ def _run(plant, scenario, controller, observer, episodes, seed=0, **kw):
 
 
 # ---- stabilisation -------------------------------------------------------------------------------
+@pytest.mark.parametrize("episodes", [
+    pytest.param(24, id="24"),                                    # the quick loop's sample
+    pytest.param(200, id="200", marks=pytest.mark.slow)])         # the statistic
 @pytest.mark.parametrize(("controller", "observer"), [
     ("lqr", "none"), ("dlqr", "none"), ("dlqr", "kalman"), ("dlqr", "kalman-predictor"),
     ("dlqr", "kalman-tv"), ("lqr", "kalman-bucy"), ("lqr", "kalman")])
-def test_lqg_stabilises_the_lecture_scenario(plant, controller, observer):
-    rows = _run(plant, LECTURE, controller, observer, 200).rows
+def test_lqg_stabilises_the_lecture_scenario(plant, controller, observer, episodes):
+    """≥ 99 % of 200 noisy lecture episodes balance (every one of the first 24, in the quick loop)."""
+    rows = _run(plant, LECTURE, controller, observer, episodes).rows
     s = summarize(rows)
     assert s["success_rate"] >= 0.99, s["failures"]
     assert s["max_abs_theta"]["mean"] < 0.3
@@ -387,6 +391,11 @@ def test_step_one_equals_step_on_one_row(plant, changes):
         many.step_one(0.0)
 
 
+def _reset_mask(reset, n):
+    """A backend's answer as a mask: ``None`` (no row reset) as n False, an array copied."""
+    return np.zeros(n, dtype=bool) if reset is None else reset.copy()
+
+
 def test_batch_physics_aligned_and_general_record_copies_agree(plant):
     """The shipped model's records go into the period buffer as one run per row (``aligned``);
     models with other qpos/qvel layouts take the general strided copy: both fill rows 1 … k with
@@ -404,12 +413,32 @@ def test_batch_physics_aligned_and_general_record_copies_agree(plant):
         phys = BatchPhysics(plant, n, 1, k, aligned=aligned)
         assert phys.aligned is aligned
         period = PeriodBuffer(n, k, np.ones(5))
-        resets.append(phys.advance(x, u, None, period.view(n)))
+        resets.append(_reset_mask(phys.advance(x, u, None, period.view(n)), n))
         bufs.append(period.buf)
     assert np.array_equal(bufs[0][:, 1:k + 1, :4], bufs[1][:, 1:k + 1, :4])
     assert np.array_equal(resets[0], resets[1]) and resets[0].tolist() == [False, False, True,
                                                                               False, False]
     assert np.all(np.abs(bufs[0][:, 1:k + 1, :4] - x[:, None, :])[[0, 1, 3, 4]] > 0)   # it moved
+
+
+def test_backends_report_a_reset_of_one_row_and_none_when_calm(plant):
+    """A one-row period: the batch backend answers by one float comparison, the ``mj_step`` backend
+    by its loop; both return ``None`` for a calm row and ``[True]`` for a row MuJoCo reset, and the
+    failure rule reads that as ``diverged`` at the period's last step."""
+    from pendulum_lqg.core.period import PeriodBuffer
+    from pendulum_lqg.core.physics import BatchPhysics, StepPhysics
+
+    k = 10
+    bounds = rules.failure_bounds(theta_max=0.5, track_limit=2.4, u_max=10.0)
+    for phys in (BatchPhysics(plant, 1, 1, k), StepPhysics(plant, k)):
+        period = PeriodBuffer(1, k, bounds)
+        view = period.view(1)
+        assert phys.advance(np.array([[0.0, 0.1, 0.0, 0.0]]), np.array([1.0]), None, view) is None
+        reset = phys.advance(np.array([[0.0, 0.1, 0.0, 1e300]]), np.array([1.0]), None, view)
+        assert reset is not None and reset.tolist() == [True], type(phys).__name__
+        failed, reason, fail_step = rules.detect_failure(view, reset, theta_max=0.5, track_limit=2.4)
+        assert failed.tolist() == [True] and reason.tolist() == [rules.FAIL_DIVERGED]
+        assert fail_step is not None and fail_step.tolist() == [k - 1]     # the reset: the last step
 
 
 @pytest.mark.parametrize("n", [1, 5])
@@ -434,10 +463,33 @@ def test_batch_physics_direct_and_public_rollout_agree(plant, n):
         phys.direct_call = direct
         period = PeriodBuffer(n, k, np.ones(5))
         for _ in range(2):                           # the second call reuses the cached views
-            resets.append(phys.advance(x, u, None, period.view(n)).copy())
+            resets.append(_reset_mask(phys.advance(x, u, None, period.view(n)), n))
         bufs.append(period.buf.copy())
     assert np.array_equal(bufs[0], bufs[1])
     assert all(np.array_equal(r, resets[0]) for r in resets), resets
     assert resets[0].tolist() == [False] * (n - 1) + [n > 1]
     calm = slice(0, max(1, n - 1))                   # the rows MuJoCo did not reset
     assert np.all(bufs[0][calm, 1:k + 1, :4] != x[calm, None, :])                     # they moved
+
+
+@pytest.mark.parametrize("rows", [1, 200])                 # a mask tested by its bytes; a reduced one
+def test_the_fast_failure_check_sees_any_one_number_out_of_bounds(rows):
+    """``all_inside`` is True exactly when every number of the period is strictly inside its bound:
+    one number at its bound, or a nan, anywhere in the buffer makes it False."""
+    from pendulum_lqg.core.period import SMALL_MASK, PeriodBuffer
+
+    k = 10
+    bounds = rules.failure_bounds(theta_max=0.5, track_limit=2.4, u_max=10.0)
+    view = PeriodBuffer(rows, k, bounds).view(rows)
+    assert view.small == (view.inside.size <= SMALL_MASK) and view.small == (rows == 1)
+    rng = np.random.default_rng(5)
+    view.buf[...] = rng.uniform(-0.99, 0.99, view.buf.shape) * bounds
+    assert rules.all_inside(view)
+    # (column, value): θ at θ_max, p at −track, a nan velocity, a force beyond 2·u_max
+    for col, value in ((1, bounds[1]), (0, -bounds[0]), (2, np.nan), (4, 2 * bounds[4])):
+        for row, step in [(0, 0), (rows - 1, k + 1), (rows // 2, k // 2)]:
+            saved = view.buf[row, step, col]
+            view.buf[row, step, col] = value
+            assert not rules.all_inside(view), (col, value, row, step)
+            view.buf[row, step, col] = saved
+    assert rules.all_inside(view)

@@ -164,11 +164,12 @@ def test_every_new_observer_stabilises_the_noise_free_loop(plant, observer):
     from pendulum_lqg.plugins import build_policy
 
     scenario = Scenario(noise=NoiseModel.lecture(scale=0.0))         # θ₀ = 0.1, x̂₀ = 0
-    with warnings.catch_warnings():
+    assert scenario.x0_std == (0.0, 0.0, 0.0, 0.0)     # no noise, one start: every episode alike,
+    with warnings.catch_warnings():                    # so two stand for any number
         warnings.simplefilter("ignore")
         policy = build_policy(f"dlqr+{observer}", plant=plant, scenario=scenario)
-    s = summarize(run_episodes(plant, scenario, policy, seed=0, episodes=range(100)).rows)
-    assert s["success_rate"] >= 0.99
+    s = summarize(run_episodes(plant, scenario, policy, seed=0, episodes=range(2)).rows)
+    assert s["success_rate"] == 1.0
     assert np.isfinite(s["rms_est_err_p_dot"]["mean"])
 
 

@@ -6,10 +6,12 @@ What is collected, from the fenced blocks of README.md and docs/*.md:
   (``uv run pendulum-lqg …``, ``uv run --extra ray pendulum-lqg …`` or the bare console script;
   a ``$`` prompt, a trailing ``# comment`` and a shell redirection or pipe are dropped). Each is
   parsed by the command's own argument parser, so a flag that does not exist (``design --theta0``)
-  fails here. The short ones also run, as a subprocess of the ``pendulum-lqg`` console script
-  (``python -m pendulum_lqg.cli`` without it) in a scratch folder: ``design``, ``--help`` /
-  ``--version``, and ``run`` with ``--episodes`` ≤ 4; the
-  test checks the exit status and a value in the output (the DLQR gain, the success count);
+  fails here. The short ones also run, through the console script's own function
+  (``pendulum_lqg.cli.main``, in this process: a subprocess would add only an interpreter's
+  start-up, which ``tests/envs/test_envs.py`` and CI's smoke run test with the real console
+  script) in a scratch folder: ``design``, ``--help`` / ``--version``, and ``run`` with
+  ``--episodes`` ≤ 4; the test checks the exit status and a value in the output (the DLQR gain,
+  the success count);
 * a ```` ```python ```` block preceded by ``<!-- test -->`` runs as a script in a scratch folder;
   when the next fenced block is ```` ```text ```` (what the page says it prints), its output must
   equal that block;
@@ -19,8 +21,9 @@ What is collected, from the fenced blocks of README.md and docs/*.md:
   folders are linked there, so that a command naming them finds them.
 
 README's commands and examples, the plain ``design``, ``--help`` and ``--version`` are the quick set
-(about 45 s); the other pages' commands and examples are marked ``slow``. The selected commands
-and examples run two at a time, once per session (module fixtures), and each test checks its own.
+; the other pages' commands and examples are marked ``slow``. The selected commands run one
+after the other and the examples two at a time, once per session (module fixtures), and each test
+checks its own.
 """
 
 from __future__ import annotations
@@ -202,10 +205,25 @@ def workdir(tmp_path_factory):
     return work
 
 
-def _cli() -> list[str]:
-    """The console script next to this interpreter (what the pages call), else ``-m``."""
-    script = Path(sys.executable).with_name("pendulum-lqg")
-    return [str(script)] if script.is_file() else [sys.executable, "-m", "pendulum_lqg.cli"]
+def _run_in_process(argv: tuple[str, ...], cwd: Path) -> subprocess.CompletedProcess:
+    """``pendulum-lqg ARGV`` run in ``cwd`` by the console script's function, in this process,
+    with its exit status, stdout and stderr as a subprocess would give them."""
+    import contextlib
+    import io
+
+    from pendulum_lqg.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(out), \
+            contextlib.redirect_stderr(err):
+        mp.chdir(cwd)
+        mp.setenv("COLUMNS", "120")
+        try:
+            status = main(list(argv))
+        except SystemExit as exc:             # --help and --version exit through argparse
+            status = exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
+    return subprocess.CompletedProcess(["pendulum-lqg", *argv], status, out.getvalue(),
+                                       err.getvalue())
 
 
 def _run(argv, cwd: Path) -> subprocess.CompletedProcess:
@@ -233,9 +251,9 @@ def _run_all(jobs: dict, workers: int = 2) -> dict:
 
 @pytest.fixture(scope="module")
 def short_runs(request, workdir) -> dict:
-    """The selected short commands, run (two at a time) in the scratch folder, by argv."""
+    """The selected short commands, run in the scratch folder, by argv."""
     cmds = _selected(request, "test_short_commands_run", "cmd")
-    return _run_all({c.argv: ([*_cli(), *c.argv], workdir) for c in cmds})
+    return {c.argv: _run_in_process(c.argv, workdir) for c in cmds}
 
 
 @pytest.mark.parametrize("cmd", _params(_unique([c for c in COMMANDS if _is_short(c)])))

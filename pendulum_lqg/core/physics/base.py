@@ -34,7 +34,7 @@ class Physics(Protocol):
     k: int
 
     def advance(self, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None,
-                out: PeriodView) -> np.ndarray:
+                out: PeriodView) -> np.ndarray | None:
         """k physics steps of rows ``0 … n−1`` (``n = out.n``) from the states ``x`` (n, 4).
 
         Parameters
@@ -51,7 +51,8 @@ class Physics(Protocol):
         Returns
         -------
         (n,) bool: the rows whose simulation became unstable (MuJoCo reset its data); their
-        states stop at the last good step and repeat it
+        states stop at the last good step and repeat it. ``None`` when no row was reset (the
+        common case, told apart without an array operation)
         """
         ...
 

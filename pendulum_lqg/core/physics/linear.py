@@ -47,7 +47,7 @@ class LinearPhysics:
         raise ConfigError("randomize: per-episode models need plant = 'mujoco'")
 
     def advance(self, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None,
-                out: PeriodView) -> np.ndarray:
+                out: PeriodView) -> np.ndarray | None:
         """See :meth:`Physics.advance <pendulum_lqg.core.physics.base.Physics.advance>`;
         nothing resets."""
         states = out.states
@@ -59,4 +59,4 @@ class LinearPhysics:
             x_end = np.einsum("ij,nj->ni", self.Phi, x) + u[:, None] * self.Gamma
             states[...] = x[:, None, :] + self._frac * (x_end - x)[:, None, :]
             states[:, -1] = x_end
-        return np.zeros(x.shape[0], dtype=bool)
+        return None                                        # a linear model never resets

@@ -104,11 +104,11 @@ class BatchPhysics:
         self.batch.set_models(list(models) + [self.model] * (self.capacity - len(models)))
 
     def advance(self, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None,
-                out: PeriodView) -> np.ndarray:
+                out: PeriodView) -> np.ndarray | None:
         """See :meth:`Physics.advance <pendulum_lqg.core.physics.base.Physics.advance>`."""
         rows = self._rows(out)
         rows.dynamic[...] = self.state0_dynamic              # mj_resetData's values,
-        rows.warning[...] = 0                                # its warnings too (see _Rows)
+        rows.warning.fill(0)                                 # its warnings too (see _Rows)
         if rows.x is not None:
             rows.x[...] = x
         else:                                               # x's columns are not consecutive
@@ -132,7 +132,10 @@ class BatchPhysics:
                                ids=rows.ids, out=rows.out)
         if not rows.in_place:
             self._store(out.buf, rows.rec)
-        return rows.time < self.reset_before
+        if rows.one:                                        # one float compared, no array made
+            return None if rows.time.item(0) >= self.reset_before else rows.time < self.reset_before
+        reset = rows.time < self.reset_before
+        return reset if np.count_nonzero(reset) else None
 
     def _rows(self, view: PeriodView) -> _Rows:
         """The views of the batch's first ``view.n`` simulations, made once per period view."""
@@ -164,6 +167,7 @@ class _Rows:
       zeroes them. The batch stops a simulation (and :meth:`BatchPhysics.advance` reports its
       reset) when a counter rises; a counter left at 1 by an earlier instability would not rise
       when MuJoCo resets the data again, and the reset state would pass for a cart at rest;
+    * ``one``: a single row, whose reset :meth:`BatchPhysics.advance` tells by one float;
     * ``control``: the per-step control buffer; ``ids``: the simulations 0 … n−1 for
       ``Batch.rollout`` (``None`` when they are all of the batch's);
     * ``rec``, ``out``, ``records``: where the rollout records, as the public call and the C++ core
@@ -174,7 +178,7 @@ class _Rows:
     def __init__(self, physics: BatchPhysics, view: PeriodView) -> None:
         n = view.n
         state = physics.batch.state[:n]
-        self.view, self.state = view, state
+        self.view, self.state, self.one = view, state, n == 1
         self.dynamic = state[:, physics.dynamic]
         cols = physics.x_cols
         self.x = state[:, cols] if isinstance(cols, slice) else None     # a view, or no view

@@ -34,7 +34,7 @@ class StepPhysics:
         self.models = list(models)
 
     def advance(self, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None,
-                out: PeriodView) -> np.ndarray:
+                out: PeriodView) -> np.ndarray | None:
         """See :meth:`Physics.advance <pendulum_lqg.core.physics.base.Physics.advance>`."""
         m, d, k = self.plant.model, self.data, self.k
         h = self.plant.timestep
@@ -66,4 +66,4 @@ class StepPhysics:
                     break
             else:
                 reset[r] = abs(d.time - k * h) > 0.5 * h
-        return reset
+        return reset if reset.any() else None
