@@ -252,12 +252,14 @@ def load_lti(path: str | Path) -> LTIPlant:
         raise ConfigError(f"{exc} (in {path})") from exc
 
 
-def design_lti_policy(plant: LTIPlant, name: str) -> Any:
+def design_lti_policy(plant: LTIPlant, name: str, *, u_max: float | None = None) -> Any:
     """The built-in policy ``"controller+observer"`` on ``plant``: ``lqr`` (continuous, emulated
     under sample-and-hold) or ``dlqr`` (on the ZOH model with the exact sampled cost weights);
     observers ``none``, ``kalman`` (steady-state filter, current form), ``kalman-predictor``,
     ``luenberger`` (current form, the plant's ``observer_poles`` by z = e^{sT}, default three
-    times the controller's). Returns a :class:`~pendulum_lqg.policy.Policy`."""
+    times the controller's). ``u_max``: the force limit in force, to which the policy saturates
+    its own output (default the file's ``force_limit``). Returns a
+    :class:`~pendulum_lqg.policy.Policy`."""
     from pendulum_lqg import design
     from pendulum_lqg.estimators import CurrentEstimator, PredictorEstimator, TrueState
     from pendulum_lqg.policy import Policy
@@ -295,8 +297,22 @@ def design_lti_policy(plant: LTIPlant, name: str) -> Any:
             obs = design.dluenberger(Phi, C, z ** 3, form="current")
         est = CurrentEstimator(Phi, Gamma, C, obs.L)
         info["L"], info["observer_poles"] = obs.L, obs.poles
-    return Policy(K=K, estimator=est, u_max=plant.force_limit, name=name,
+    return Policy(K=K, estimator=est, u_max=plant.force_limit if u_max is None else float(u_max),
+                  name=name,
                   x_hat0=np.zeros(n), info=info)
+
+
+def lti_scenario(plant: LTIPlant, *, duration: float = 10.0, noise_scale: float = 1.0,
+                 **fields: Any) -> Any:
+    """The :class:`~pendulum_lqg.core.scenario.Scenario` an LTI plant runs under (``run --lti``,
+    ``bench`` with ``lti_file``): its own period, the plant ``linear-zoh`` (its exact sampled
+    model), the noise ``scale`` (its W and V come from the file), and any other scenario
+    ``fields`` (``estimate0``, ``force_limit``, the delays, ``dropout``)."""
+    from pendulum_lqg.core.noise import NoiseModel
+    from pendulum_lqg.core.scenario import Scenario
+
+    return Scenario(control_period=plant.control_period, duration=duration, plant="linear-zoh",
+                    noise=NoiseModel(scale=noise_scale), **fields)
 
 
 def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+luenberger"), *,

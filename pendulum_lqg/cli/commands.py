@@ -23,6 +23,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise cfg_error("--policy: give either --policy or --controller/--observer, not both")
     name = (args.policy if args.policy is not None   # --policy '' is refused, not the default
             else f"{args.controller or 'dlqr'}+{args.observer or 'kalman'}")
+    if args.lti is not None:
+        from pendulum_lqg.cli.lti import run_lti
+
+        return run_lti(args, name)
     plant = load_plant(args.model)
     noise = noise_from_args(args, scale=args.noise_scale)
     scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,
