@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from typing import Any
+from typing import Any, cast
 
 from pendulum_lqg.cli.parser import cfg_error, jsonable
 
@@ -46,7 +46,7 @@ def run_lti(args: argparse.Namespace, name: str) -> int:
                             actuator_delay=args.actuator_delay, dropout=args.dropout,
                             actuator_tau=args.actuator_tau)
     lay = layout(plant, scenario)
-    u_max = limits(plant, scenario)[2]
+    u_max = limits(cast(Any, plant), scenario)[2]        # (the core types its plants as Plant)
     policy = design_lti_policy(plant, name, u_max=u_max)
     check_at_most("--episodes", args.episodes, MAX_RUN_EPISODES,
                   "run keeps every row in memory; bench streams larger studies to disk")
@@ -57,7 +57,8 @@ def run_lti(args: argparse.Namespace, name: str) -> int:
     config = {"policy": name, "seed": args.seed, "episodes": args.episodes,
               "lti": str(args.lti), "plant": plant.name, "states": list(lay.states),
               "outputs": list(lay.outputs), "x0": lay.x0.tolist(), "x0_std": lay.x0_std.tolist(),
-              "force_limit": u_max, "state_limits": lay.state_limits.tolist(),
+              "force_limit": u_max,
+              "state_limits": [] if lay.state_limits is None else lay.state_limits.tolist(),
               "scenario": scenario.to_dict()}
     from pendulum_lqg import SCHEMA_VERSION
 
