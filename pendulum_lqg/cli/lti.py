@@ -9,6 +9,8 @@ import json
 import math
 from typing import Any, cast
 
+import numpy as np
+
 from pendulum_lqg.cli.parser import cfg_error, jsonable
 
 #: Options of ``run`` that describe the cart-pole; with ``--lti`` the file says them instead
@@ -57,8 +59,8 @@ def run_lti(args: argparse.Namespace, name: str) -> int:
     config = {"policy": name, "seed": args.seed, "episodes": args.episodes,
               "lti": str(args.lti), "plant": plant.name, "states": list(lay.states),
               "outputs": list(lay.outputs), "x0": lay.x0.tolist(), "x0_std": lay.x0_std.tolist(),
-              "force_limit": u_max,
-              "state_limits": [] if lay.state_limits is None else lay.state_limits.tolist(),
+              "force_limit": _limit(u_max),       # a switched-off limit: "inf", as in "scenario"
+              "state_limits": [_limit(v) for v in np.asarray(lay.state_limits).tolist()],
               "scenario": scenario.to_dict()}
     from pendulum_lqg import SCHEMA_VERSION
 
@@ -70,6 +72,10 @@ def run_lti(args: argparse.Namespace, name: str) -> int:
     else:
         _print_summary(config, scenario, summary, fields)
     return 0
+
+
+def _limit(value: float) -> float | str:
+    return "inf" if math.isinf(value) else value
 
 
 def _check_options(args: argparse.Namespace) -> None:
@@ -103,7 +109,7 @@ def _print_summary(config: dict[str, Any], scenario: Any, s: dict[str, Any],
                      f"{s['episodes']} episodes, seed {config['seed']}, "
                      f"T = {scenario.control_period:g} s, {scenario.duration:g} s, noise scale "
                      f"{scenario.noise.scale:g}, x0 = {config['x0']}, force limit "
-                     f"{config['force_limit']:g}"))
+                     f"{config['force_limit']}"))
     con.print(f"success: {s['successes']}/{s['episodes']} = {s['success_rate']:.1%} "
               f"(95 % Wilson CI {lo:.1%} – {hi:.1%})"
               + escape(f"; failures: {s['failures']}" if s["failures"] else ""))
