@@ -48,6 +48,12 @@ def episode_fields(reported: tuple[str, ...], states: tuple[str, ...], *,
             *(("settling_time",) if settle else ()))
 
 
+def layout_fields(layout: Layout) -> tuple[str, ...]:
+    """The episode columns of a plant's :class:`~pendulum_lqg.core.layout.Layout`."""
+    return episode_fields(tuple(layout.states[c] for c in layout.order), layout.states,
+                          settle=layout.settle is not None)
+
+
 def summary_metrics(fields: tuple[str, ...]) -> tuple[str, ...]:
     """The metrics :func:`summarize` aggregates for episode rows with these columns."""
     return (*fields[fields.index("cost"):], "time_to_failure")
@@ -108,7 +114,7 @@ class MetricsAccumulator:
         lay = CARTPOLE if layout is None else layout
         self.m, self.nx, self.order, self.settle_col = lay.reported, lay.n, lay.order, lay.settle
         self.names = tuple(lay.states[c] for c in lay.order)
-        self.fields = episode_fields(self.names, lay.states, settle=lay.settle is not None)
+        self.fields = layout_fields(lay)
         self.est_fields = est_fields(lay.states)
         self._steps = np.arange(1, k + 1)[:, None]      # (k, 1): 1 … k, the settling-time index
         self._alloc(max(n, 1))
