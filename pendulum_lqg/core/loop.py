@@ -281,8 +281,7 @@ class Simulator:
         requested = rules.saturate(u, self.u_max)
         v, command, reset = self._advance(requested)
         failed, reason, fail_step = rules.detect_failure(
-            v, reset, theta_max=self._theta_max, track_limit=self.track, bad_force=bad,
-            state_limits=self._state_limits)
+            v, reset, self._theta_max, self.track, self._state_limits, bad_force=bad)
         return self._finish_period(v, command, requested, x_hat, failed, reason, fail_step)
 
     def step_one(self, u: float) -> tuple[float, int, float]:
@@ -298,9 +297,9 @@ class Simulator:
         u = rules.saturate(float(u), self.u_max)
         self._u1[0] = u
         v, _, reset = self._advance(self._u1)
-        _, reason, fail_step = rules.detect_failure(
-            v, reset, theta_max=self._theta_max, track_limit=self.track,
-            state_limits=self._state_limits)
+        # (positional: binding keywords costs the env's every step more than the call's work)
+        _, reason, fail_step = rules.detect_failure(v, reset, self._theta_max, self.track,
+                                                    self._state_limits)
         if fail_step is None:                           # no row failed: the reason is FAIL_NONE
             cost, code = rules.period_cost(v.z, self.weights).item(), rules.FAIL_NONE
         else:

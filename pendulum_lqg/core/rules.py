@@ -139,9 +139,9 @@ def all_inside(view: PeriodView) -> bool:
     return 0 not in inside.tobytes() if view.small else bool(inside.all())
 
 
-def detect_failure(view: PeriodView, reset: np.ndarray | None, *, theta_max: float,
-                   track_limit: float,
-                   bad_force: np.ndarray | None = None, state_limits: np.ndarray | None = None,
+def detect_failure(view: PeriodView, reset: np.ndarray | None, theta_max: float,
+                   track_limit: float, state_limits: np.ndarray | None = None,
+                   bad_force: np.ndarray | None = None,
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """Which rows of the period in ``view`` fail, why, and at which physics step.
 
@@ -151,10 +151,11 @@ def detect_failure(view: PeriodView, reset: np.ndarray | None, *, theta_max: flo
     reset : (n,) bool, the rows MuJoCo reset after an instability (they diverged), or ``None``
         when no row was reset
     theta_max, track_limit : the failure limits [rad], [m]
+    state_limits : an LTI plant's (n_x,) limits: ``|x_i| > limit_i`` fails as ``state_limit``
+        in place of the pole and track rules (``theta_max``, ``track_limit`` then unused), or
+        ``None`` (the cart-pole)
     bad_force : (n,) bool rows whose requested force was not finite (:func:`nonfinite_forces`):
         they fail as ``diverged`` at step 0
-    state_limits : an LTI plant's (n_x,) limits: ``|x_i| > limit_i`` fails as ``state_limit``
-        in place of the pole and track rules (``theta_max``, ``track_limit`` then unused)
 
     Returns
     -------
