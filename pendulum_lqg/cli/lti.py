@@ -28,11 +28,10 @@ _CARTPOLE_ONLY = {"model": (None, "the file is the plant"), "theta0": (0.1, "the
                   "randomize": (None, "it randomises the cart-pole's model")}
 
 
-def run_lti(args: argparse.Namespace, name: str) -> int:
-    """``run`` with ``--lti FILE`` (``name``: the policy, ``controller+observer``)."""
-    from pendulum_lqg.cli.commands import _run_in_batches, _watchdog
+def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, dict[str, Any]]:
+    """``run`` with ``--lti FILE`` (``name``: the policy, ``controller+observer``): the plant, the
+    scenario, the policy and the configuration to report; ``cmd_run`` runs them."""
     from pendulum_lqg.core.layout import layout
-    from pendulum_lqg.core.metrics import summarize, summary_metrics
     from pendulum_lqg.core.rules import limits
     from pendulum_lqg.limits import MAX_RUN_EPISODES, check_at_most
     from pendulum_lqg.lti import design_lti_policy, load_lti, lti_scenario
@@ -52,22 +51,27 @@ def run_lti(args: argparse.Namespace, name: str) -> int:
     policy = design_lti_policy(plant, name, u_max=u_max)
     check_at_most("--episodes", args.episodes, MAX_RUN_EPISODES,
                   "run keeps every row in memory; bench streams larger studies to disk")
-    with _watchdog(args):
-        res = _run_in_batches(plant, scenario, policy, args, trajectory=False)
-    fields = tuple(res.rows[0])
-    summary = summarize(res.rows, summary_metrics(fields))
     config = {"policy": name, "seed": args.seed, "episodes": args.episodes,
               "lti": str(args.lti), "plant": plant.name, "states": list(lay.states),
               "outputs": list(lay.outputs), "x0": lay.x0.tolist(), "x0_std": lay.x0_std.tolist(),
               "force_limit": _limit(u_max),       # a switched-off limit: "inf", as in "scenario"
               "state_limits": [_limit(v) for v in np.asarray(lay.state_limits).tolist()],
               "scenario": scenario.to_dict()}
-    from pendulum_lqg import SCHEMA_VERSION
+    return plant, scenario, policy, config
 
+
+def lti_report(args: argparse.Namespace, config: dict[str, Any], scenario: Any,
+               rows: list[dict[str, Any]]) -> int:
+    """Print the summary of ``run --lti``'s episode ``rows`` (``--json``: every row too)."""
+    from pendulum_lqg import SCHEMA_VERSION
+    from pendulum_lqg.core.metrics import summarize, summary_metrics
+
+    fields = tuple(rows[0])
+    summary = summarize(rows, summary_metrics(fields))
     if args.json:
         out = {"schema_version": SCHEMA_VERSION, "config": config,
                "success_rate": summary["success_rate"], "success_ci95": summary["success_ci95"],
-               "summary": summary, "episodes": res.rows}
+               "summary": summary, "episodes": rows}
         print(json.dumps(jsonable(out), indent=2))
     else:
         _print_summary(config, scenario, summary, fields)

@@ -200,3 +200,15 @@ class _ZeroForce:
 
     def act(self, y):
         return np.full(y.shape[0], self.force)
+
+
+def test_lti_trajectories_have_the_plants_shapes(double_integrator):
+    """Kept trajectories of a 2-state, 1-output plant: x (N, 2), y (N, 1), y_true = C x, the
+    Kalman filter's covariance (N, 2, 2); the measurement is y_true plus noise of std √V = 10."""
+    plant = double_integrator
+    tr = run_episodes(plant, _scenario(plant, 5.0), design_lti_policy(plant, "dlqr+kalman"),
+                      seed=4, episodes=[0], trajectory=True).trajectories[0]
+    assert tr.x.shape == (500, 2) and tr.y.shape == (500, 1) and tr.P.shape == (500, 2, 2)
+    np.testing.assert_array_equal(tr.y_true, tr.x @ plant.C.T)
+    assert np.std(tr.y - tr.y_true) == pytest.approx(10.0, rel=0.1)
+    assert tr.states.shape == (500, 2)
