@@ -111,6 +111,9 @@ def test_run_cli_on_the_double_integrator_gives_run_episodes_rows(capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["config"]["x0"] == [1.0, 0.0] and out["config"]["force_limit"] == "inf"
     assert out["config"]["state_limits"] == ["inf", "inf"]
+    # the scenario reported without the cart-pole's fields (x0, theta_max, noise densities)
+    assert out["config"]["scenario"]["noise"] == {"scale": 1.0}
+    assert "x0" not in out["config"]["scenario"] and "theta_max" not in out["config"]["scenario"]
     plant = load_lti(path)
     rows = run_episodes(plant, lti_scenario(plant, duration=3.0),
                         design_lti_policy(plant, "dlqr+luenberger"), seed=2,

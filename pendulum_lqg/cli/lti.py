@@ -28,6 +28,12 @@ _CARTPOLE_ONLY = {"model": (None, "the file is the plant"), "theta0": (0.1, "the
                   "randomize": (None, "it randomises the cart-pole's model")}
 
 
+#: The scenario fields an LTI plant runs with (the others describe the cart-pole; the file holds
+#: their counterparts, reported beside them in the configuration).
+_SCENARIO_FIELDS = ("control_period", "duration", "estimate0", "force_limit", "plant",
+                    "measurement_delay", "actuator_delay", "dropout")
+
+
 def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, dict[str, Any]]:
     """``run`` with ``--lti FILE`` (``name``: the policy, ``controller+observer``): the plant, the
     scenario, the policy and the configuration to report; ``cmd_run`` runs them."""
@@ -56,7 +62,8 @@ def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, d
               "outputs": list(lay.outputs), "x0": lay.x0.tolist(), "x0_std": lay.x0_std.tolist(),
               "force_limit": _limit(u_max),       # a switched-off limit: "inf", as in "scenario"
               "state_limits": [_limit(v) for v in np.asarray(lay.state_limits).tolist()],
-              "scenario": scenario.to_dict()}
+              "scenario": {k: v for k, v in scenario.to_dict().items() if k in _SCENARIO_FIELDS}}
+    config["scenario"]["noise"] = {"scale": scenario.noise.scale}     # W and V: the file's
     return plant, scenario, policy, config
 
 

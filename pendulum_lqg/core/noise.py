@@ -180,18 +180,14 @@ class NoiseStream:
         entries. Diagonal covariances scale the normals column by column (as the cart-pole's); a
         full one mixes them, ``[δx, v] = F z`` with ``F Fᵀ = s²·blockdiag(Wd, V)`` (Cholesky, or
         ``U √Λ`` of the eigendecomposition of a singular one). Returns the standard deviations."""
-        factors = []
-        for cov in covariances:
-            cov = np.asarray(cov, dtype=float)
-            if np.any(cov != np.diag(np.diag(cov))):
-                self._mix = np.zeros(0)              # some block is full: mix (below)
-            factors.append(_factor(cov))
-        if self._mix is not None:
-            p, m = (f.shape[0] for f in factors)
+        covs = [np.asarray(c, dtype=float) for c in covariances]
+        if any(np.any(c != np.diag(np.diag(c))) for c in covs):    # some block is full: mix
+            Fw, Fv = (_factor(c) for c in covs)
+            p, m = Fw.shape[0], Fv.shape[0]
             mix = np.zeros((p + m, p + m))
-            mix[:p, :p], mix[p:, p:] = factors
+            mix[:p, :p], mix[p:, p:] = Fw, Fv
             self._mix = s * mix.T                    # a row of normals @ Fᵀ: one period's draw
-        proc, meas = (s * np.sqrt(np.diag(np.asarray(c, dtype=float))) for c in covariances)
+        proc, meas = (s * np.sqrt(np.diag(c)) for c in covs)
         return proc, meas
 
     @property
@@ -361,9 +357,7 @@ class NoiseStream:
 
 
 def _factor(cov: np.ndarray) -> np.ndarray:
-    """F with ``F Fᵀ = cov`` (PSD): ``√diag`` of a diagonal one, Cholesky, else ``U √Λ``."""
-    if np.all(cov == np.diag(np.diag(cov))):
-        return np.diag(np.sqrt(np.diag(cov)))
+    """F with ``F Fᵀ = cov`` (PSD): Cholesky, or ``U √Λ`` of a singular one."""
     try:
         return np.linalg.cholesky(cov)
     except np.linalg.LinAlgError:                     # singular (noise on a subspace)
