@@ -12,7 +12,9 @@ class Trajectory:
     """One episode's trajectory (kept only when a caller asks, e.g. for a recording).
 
     Control-rate arrays have one row per control sample ``n`` (time ``t[n]``); ``states`` holds the
-    physics-rate states with times ``t_physics``.
+    physics-rate states with times ``t_physics``. The shapes are the cart-pole's; an LTI plant's
+    (:mod:`~pendulum_lqg.core.layout`) have its ``n_x`` states and ``p`` outputs in place of 4 and
+    2, and ``y_true = C x``.
 
     Attributes
     ----------
@@ -21,9 +23,7 @@ class Trajectory:
     x_prior : (N, 4) a-priori estimate; innovation : (N, 2); P : (N, 4, 4) a-posteriori covariance
     (nan if the estimator has none); cost : (N,) running cost at the end of each period;
     t_physics : (N·k,), states : (N·k, 4); u_policy : (N,) the force the policy asked for, before
-    saturation (``u`` is that force saturated to ±u_max). An LTI plant's
-    (:mod:`~pendulum_lqg.core.layout`): ``n_x`` states and ``p`` outputs in place of 4 and 2,
-    ``y_true = C x``.
+    saturation (``u`` is that force saturated to ±u_max)
     """
 
     episode: int
