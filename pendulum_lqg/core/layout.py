@@ -72,10 +72,6 @@ class Layout:
     def p(self) -> int:
         return len(self.outputs)
 
-    @property
-    def lti(self) -> bool:
-        return self.state_limits is not None
-
 
 #: The cart-pole's layout (with the default scenario's initial state and weights): metrics of p
 #: and θ (θ's columns first), the settling time of θ, ``y = [p, θ]``.
