@@ -212,3 +212,18 @@ def test_lti_trajectories_have_the_plants_shapes(double_integrator):
     np.testing.assert_array_equal(tr.y_true, tr.x @ plant.C.T)
     assert np.std(tr.y - tr.y_true) == pytest.approx(10.0, rel=0.1)
     assert tr.states.shape == (500, 2)
+
+
+def test_lti_plant_takes_the_scenarios_sensing(double_integrator):
+    """The delay line holds p = 1 output: with a 3-period measurement delay the policy's first
+    three samples are nan (nothing has arrived), as on the cart-pole."""
+    plant = double_integrator
+    sc = _scenario(plant, 1.0, measurement_delay=0.03)
+    with Simulator(plant, sc, streamed_metrics=False) as sim:
+        sim.reset(episode_generators(episode_seeds(0, range(2))))
+        ys = []
+        for _ in range(4):
+            ys.append(sim.measure())
+            sim.step(np.zeros(2))
+    assert all(y.shape == (2, 1) for y in ys)
+    assert np.isnan(ys[0]).all() and np.isnan(ys[2]).all() and np.isfinite(ys[3]).all()
