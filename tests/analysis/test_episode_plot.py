@@ -123,11 +123,20 @@ def test_plotting_leaves_the_callers_matplotlib_state_alone(plant):
     assert out == "[]", out
 
 
-def test_run_plot_writes_a_png_of_the_first_episode(tmp_path, capsys):
+def test_run_plot_writes_a_png_of_the_first_episode(tmp_path, capsys, monkeypatch):
+    import pendulum_lqg.analysis.episode_plot as episode_plot
+
+    saved = []
+    real_save = episode_plot.save_episode_plot
+    monkeypatch.setattr(episode_plot, "save_episode_plot",
+                        lambda fig, path: saved.append(fig) or real_save(fig, path))
     out = tmp_path / "ep.png"
     assert main(["run", "--plot", str(out), "--episodes", "1", "--duration", "1"]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert f"plot: {out} (episode 0)" in capsys.readouterr().err
+    (fig,) = saved              # one panel per state, then y and u
+    assert [ax.get_ylabel() for ax in fig.axes] == [*STATE_LABELS, "y", "u [N]"]
+    assert fig.get_suptitle().startswith("dlqr+kalman: episode 0 (seed ")
 
 
 def test_run_plot_episode_k_writes_an_svg(tmp_path, capsys):

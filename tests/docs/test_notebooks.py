@@ -30,6 +30,7 @@ def test_the_tutorials_are_notebooks_listed_on_the_tutorials_page():
         assert f"\n{path.stem}\n" in index, f"{path.name} is not in the toctree of tutorials/index.md"
 
 
+@pytest.mark.slow                   # a kernel and a notebook each: seconds to a minute
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_tutorial_runs(path, tmp_path, monkeypatch):
     monkeypatch.setenv("MUJOCO_GL", os.environ.get("MUJOCO_GL", "egl"))
