@@ -27,6 +27,11 @@ A TOML file::
     force_limit = inf             # optional saturation [input unit] (default inf)
     observer_poles = [-2, -3]     # optional continuous Luenberger poles (default 3× the
                                   # controller's, the documents' rule of thumb)
+    outputs = ["position"]        # optional names of y (default y1, y2, …)
+    x0 = [1, 0]                   # optional mean initial state (default 0) and its std
+    x0_std = [0, 0]               # (default 0), drawn per episode by ``run`` and ``bench``
+    state_limits = [inf, inf]     # optional failure limits |x_i| ≤ limit_i (default: none, only
+                                  # divergence ends an episode)
 
 An ``.npz`` holds the same names as arrays (``control_period`` a 0-d array).
 """
@@ -46,7 +51,8 @@ from pendulum_lqg.errors import ConfigError
 
 #: The keys of an LTI plant file.
 LTI_KEYS = ("name", "description", "control_period", "A", "B", "C", "G", "Phi", "Gamma",
-            "states", "W", "Wd", "V", "Q", "R", "force_limit", "observer_poles", "x0")
+            "states", "W", "Wd", "V", "Q", "R", "force_limit", "observer_poles", "x0",
+            "x0_std", "outputs", "state_limits")
 #: The built-in designs an LTI plant takes: controllers and observers.
 LTI_CONTROLLERS = ("lqr", "dlqr")
 LTI_OBSERVERS = ("none", "kalman", "kalman-predictor", "luenberger")
@@ -86,6 +92,28 @@ class LTIPlant:
     x0: np.ndarray | None = None
     description: str = ""
     path: Path | None = field(default=None, repr=False)
+    x0_std: np.ndarray | None = None
+    outputs: tuple[str, ...] = ()
+    state_limits: np.ndarray | None = None
+
+    #: What the simulation core asks a plant (:func:`pendulum_lqg.core.layout.layout`): an LTI
+    #: plant is stepped by its own (Φ, Γ) once per control period (no MuJoCo model, no track).
+    is_lti = True
+    model = None
+    track_limit = math.inf
+
+    @property
+    def timestep(self) -> float:
+        """The simulation's step: one control period (the plant exists only at T)."""
+        return self.control_period
+
+    @property
+    def u_max(self) -> float:
+        return self.force_limit
+
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        return self.outputs or tuple(f"y{i + 1}" for i in range(self.C.shape[0]))
 
     @property
     def n_states(self) -> int:
@@ -179,6 +207,19 @@ def lti_from_mapping(data: dict[str, Any], *, name: str = "lti", path: Path | No
     if states and len(states) != n:
         raise ConfigError(f"states: expected {n} names, got {len(states)}")
     x0 = None if "x0" not in data else _matrix("x0", data["x0"], 1, n)[0]
+    x0_std = None if "x0_std" not in data else _matrix("x0_std", data["x0_std"], 1, n)[0]
+    if x0_std is not None and np.any(x0_std < 0):
+        raise ConfigError(f"x0_std: expected {n} non-negative numbers, got {data['x0_std']!r}")
+    outputs = tuple(str(s) for s in data.get("outputs", ()))
+    if outputs and len(outputs) != p:
+        raise ConfigError(f"outputs: expected {p} names, got {len(outputs)}")
+    state_limits = None
+    if "state_limits" in data:
+        raw = np.atleast_1d(np.asarray(data["state_limits"], dtype=object))
+        if raw.shape != (n,):
+            raise ConfigError(f"state_limits: expected {n} limits (inf: none), got "
+                              f"{data['state_limits']!r}")
+        state_limits = np.array([positive_limit("state_limits", v) for v in raw.tolist()])
     return LTIPlant(
         name=str(data.get("name", name)), description=str(data.get("description", "")),
         control_period=T, Phi=Phi, Gamma=Gamma, C=C, G=G, W=W, V=V, Q=Q, R=R,
@@ -187,7 +228,8 @@ def lti_from_mapping(data: dict[str, Any], *, name: str = "lti", path: Path | No
         W_per_period=per_period,
         observer_poles=None if poles is None else tuple(complex(z) for z in
                                                         np.atleast_1d(poles).tolist()),
-        states=states, x0=x0, path=path)
+        states=states, x0=x0, path=path, x0_std=x0_std, outputs=outputs,
+        state_limits=state_limits)
 
 
 def load_lti(path: str | Path) -> LTIPlant:
@@ -210,12 +252,14 @@ def load_lti(path: str | Path) -> LTIPlant:
         raise ConfigError(f"{exc} (in {path})") from exc
 
 
-def design_lti_policy(plant: LTIPlant, name: str) -> Any:
+def design_lti_policy(plant: LTIPlant, name: str, *, u_max: float | None = None) -> Any:
     """The built-in policy ``"controller+observer"`` on ``plant``: ``lqr`` (continuous, emulated
     under sample-and-hold) or ``dlqr`` (on the ZOH model with the exact sampled cost weights);
     observers ``none``, ``kalman`` (steady-state filter, current form), ``kalman-predictor``,
     ``luenberger`` (current form, the plant's ``observer_poles`` by z = e^{sT}, default three
-    times the controller's). Returns a :class:`~pendulum_lqg.policy.Policy`."""
+    times the controller's). ``u_max``: the force limit in force, to which the policy saturates
+    its own output (default the file's ``force_limit``). Returns a
+    :class:`~pendulum_lqg.policy.Policy`."""
     from pendulum_lqg import design
     from pendulum_lqg.estimators import CurrentEstimator, PredictorEstimator, TrueState
     from pendulum_lqg.policy import Policy
@@ -253,8 +297,22 @@ def design_lti_policy(plant: LTIPlant, name: str) -> Any:
             obs = design.dluenberger(Phi, C, z ** 3, form="current")
         est = CurrentEstimator(Phi, Gamma, C, obs.L)
         info["L"], info["observer_poles"] = obs.L, obs.poles
-    return Policy(K=K, estimator=est, u_max=plant.force_limit, name=name,
+    return Policy(K=K, estimator=est, u_max=plant.force_limit if u_max is None else float(u_max),
+                  name=name,
                   x_hat0=np.zeros(n), info=info)
+
+
+def lti_scenario(plant: LTIPlant, *, duration: float = 10.0, noise_scale: float = 1.0,
+                 **fields: Any) -> Any:
+    """The :class:`~pendulum_lqg.core.scenario.Scenario` an LTI plant runs under (``run --lti``,
+    ``bench`` with ``lti_file``): its own period, the plant ``linear-zoh`` (its exact sampled
+    model), the noise ``scale`` (its W and V come from the file), and any other scenario
+    ``fields`` (``estimate0``, ``force_limit``, the delays, ``dropout``)."""
+    from pendulum_lqg.core.noise import NoiseModel
+    from pendulum_lqg.core.scenario import Scenario
+
+    return Scenario(control_period=plant.control_period, duration=duration, plant="linear-zoh",
+                    noise=NoiseModel(scale=noise_scale), **fields)
 
 
 def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+luenberger"), *,

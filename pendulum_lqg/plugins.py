@@ -78,7 +78,9 @@ class PolicyContext:
     V : (2, 2)
         Measurement-noise covariance per sample [m², rad²].
     u_max : float
-        Actuator limit [N]; forces are saturated to ``[−u_max, u_max]`` by the core.
+        Actuator limit in force [N] (the scenario's ``force_limit``, else the model's
+        ``ctrlrange``; ``inf`` when saturation is off): forces are saturated to
+        ``[−u_max, u_max]`` by the core (:func:`pendulum_lqg.core.rules.limits`).
     Q : (4, 4), R : (1, 1)
         Weights of the benchmark's cost ``J = ∫ xᵀQx + uᵀRu dt``.
     plant : pendulum_lqg.plant.Plant
@@ -108,6 +110,7 @@ class PolicyContext:
     @classmethod
     def build(cls, plant: Plant, scenario: Scenario) -> PolicyContext:
         """The context of ``plant`` (nominal) under ``scenario``'s period, noise and cost."""
+        from pendulum_lqg.core.rules import limits
         from pendulum_lqg.linearize import discretize_zoh, linearize
         from pendulum_lqg.plant import steps_per_period
         from pendulum_lqg.policy import noise_design_matrices
@@ -118,7 +121,7 @@ class PolicyContext:
         disc = discretize_zoh(lin, dt)
         G, W_in = noise_design_matrices(lin, scenario.noise, dt)
         return cls(A=lin.A, B=lin.B, C=lin.C, Phi=disc.Phi, Gamma=disc.Gamma, dt=dt,
-                   W=G @ W_in @ G.T, V=scenario.noise.V, u_max=plant.u_max,
+                   W=G @ W_in @ G.T, V=scenario.noise.V, u_max=limits(plant, scenario)[2],
                    Q=np.diag(scenario.cost_Q), R=np.array([[scenario.cost_R]]), plant=plant,
                    noise=scenario.noise, G=G)
 

@@ -93,3 +93,89 @@ def test_npz_and_toml_give_the_same_plant(tmp_path):
     np.testing.assert_array_equal(again.V, di.V)
     with pytest.raises(ConfigError, match="policy: expected one of lqr, dlqr"):
         design_lti_policy(again, "dlqr+hinf")
+
+
+# ---- run and bench with an LTI plant ------------------------------------------------------------
+def test_run_cli_on_the_double_integrator_gives_run_episodes_rows(capsys):
+    """``run --lti`` gives the rows of run_episodes on the same plant, scenario and policy (the
+    one loop), under the file's state names, with the file's x0 and force limit (inf)."""
+    import json
+
+    from pendulum_lqg.cli.parser import jsonable
+    from pendulum_lqg.core.runner import run_episodes
+    from pendulum_lqg.lti import lti_scenario
+
+    path = EXPERIMENTS / "double_integrator.toml"
+    assert main(["run", "--lti", str(path), "--episodes", "4", "--duration", "3",
+                 "--policy", "dlqr+luenberger", "--seed", "2", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["config"]["x0"] == [1.0, 0.0] and out["config"]["force_limit"] == "inf"
+    assert out["config"]["state_limits"] == ["inf", "inf"]
+    # the scenario reported without the cart-pole's fields (x0, theta_max, noise densities)
+    assert out["config"]["scenario"]["noise"] == {"scale": 1.0}
+    assert "x0" not in out["config"]["scenario"] and "theta_max" not in out["config"]["scenario"]
+    plant = load_lti(path)
+    rows = run_episodes(plant, lti_scenario(plant, duration=3.0),
+                        design_lti_policy(plant, "dlqr+luenberger"), seed=2,
+                        episodes=range(4)).rows
+    assert json.dumps(out["episodes"]) == json.dumps(jsonable(rows))      # nan → null in both
+    assert {"rms_position", "max_abs_velocity", "rms_est_err_velocity"} <= set(out["summary"])
+    assert "rms_theta" not in out["summary"]
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--theta0", "0.2"], "--theta0: not with --lti"),
+    (["--plot", "x.png"], "--plot: not with --lti"),
+    (["--plant", "linear-euler"], "--plant: an LTI plant runs"),
+    (["--policy", "plug.py:make"], "--policy: with --lti, a built-in"),
+    (["--dt", "0.05"], "--dt: the LTI plant 'double_integrator' is sampled at 0.01 s"),
+])
+def test_run_cli_refuses_the_cartpoles_options_with_lti(capsys, extra, message):
+    assert main(["run", "--lti", str(EXPERIMENTS / "double_integrator.toml"), "--episodes", "1",
+                 *extra]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_bench_on_an_lti_experiment(tmp_path):
+    """The shipped double_integrator experiment: its CSV columns named after the file's states,
+    its rows those of run_episodes, and its summary's theory the theory's numbers."""
+    import json
+
+    from pendulum_lqg.bench.experiments import load_spec
+    from pendulum_lqg.core.runner import run_episodes
+    from pendulum_lqg.files import read_csv
+    from pendulum_lqg.lti import lti_scenario
+
+    out = tmp_path / "di"
+    assert main(["bench", "double_integrator", "--episodes", "3", "--out", str(out),
+                 "--quiet"]) == 0
+    rows = read_csv(out / "episodes.csv")
+    assert len(rows) == 4 * 3 and "rms_velocity" in rows[0] and "rms_theta" not in rows[0]
+    plant = load_lti(EXPERIMENTS / "double_integrator.toml")
+    mine = run_episodes(plant, lti_scenario(plant, duration=20.0, noise_scale=0.5),
+                        design_lti_policy(plant, "dlqr+kalman"), seed=0, episodes=range(3)).rows
+    assert [r["cost"] for r in rows[:3]] == [r["cost"] for r in mine]
+    summary = json.loads((out / "summary.json").read_text())
+    first = summary["configurations"][0]
+    th = lti_theory(plant, ("dlqr+kalman",), noise_scale=0.5, duration=20.0)["dlqr+kalman"]
+    assert first["theory"]["rms_position"] == th.std["position"]
+    assert first["theory"]["rms_est_err_velocity"] == th.estimate_error_std["velocity"]
+    assert "| RMS position | theory |" in (out / "summary.md").read_text()
+    spec = load_spec("double_integrator")
+    assert spec.configurations[0].lti_file.endswith("lti/double_integrator.toml")
+
+
+@pytest.mark.parametrize("extra, message", [
+    ('[scenario]\nx0 = [1, 0, 0, 0]\n', "scenario.x0: not with lti_file"),
+    ('[noise]\nprocess_density = [1, 1, 1, 1]\n', "noise.process_density: not with lti_file"),
+    ('[grid]\ntheta0 = [0.1]\n', "grid.theta0: not with lti_file"),
+    ('[grid]\npolicy = ["plug.py:make"]\n', "grid.policy: 'plug.py:make': a plug-in"),
+    ('[grid]\npolicy = ["dlqr+kalman-tv"]\n', "policy: expected one of lqr, dlqr"),
+])
+def test_bench_lti_experiment_refuses_the_cartpoles_keys(tmp_path, extra, message):
+    from pendulum_lqg.bench.experiments import load_spec
+
+    path = tmp_path / "e.toml"
+    path.write_text(f'lti_file = "{EXPERIMENTS / "double_integrator.toml"}"\n' + extra)
+    with pytest.raises(ConfigError, match=message):
+        load_spec(str(path))

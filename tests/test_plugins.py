@@ -57,6 +57,14 @@ def test_policy_context_holds_the_lecture_models(plant):
     np.testing.assert_allclose(fctx.W, fctx.G @ np.diag([0.01, 0.001]) @ fctx.G.T)
 
 
+def test_policy_context_u_max_is_the_scenarios_force_limit(plant):
+    # the limit in force (rules.limits), not the model's ctrlrange: 4 N on MuJoCo, ∞ on a linear
+    # plant with saturation switched off
+    assert PolicyContext.build(plant, Scenario(force_limit=4.0)).u_max == 4.0
+    off = Scenario(plant="linear-zoh", force_limit=float("inf"))
+    assert PolicyContext.build(plant, off).u_max == float("inf")
+
+
 @pytest.mark.parametrize("observer", ["kalman", "luenberger", "full_state"])
 def test_builtin_behind_the_plugin_protocol_gives_the_builtins_episodes_bit_for_bit(plant, observer):
     ref = {"kalman": "dlqr+kalman", "luenberger": "dlqr+luenberger", "full_state": "dlqr+none"}

@@ -69,7 +69,7 @@ if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
 
 TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "model_file", "scenario", "noise",
-            "design", "model", "grid", "study", "margins", "roa")
+            "design", "model", "grid", "study", "margins", "roa", "lti_file")
 #: Analysis studies that are not plain grids: ``study = "NAME"`` plus an optional ``[NAME]`` table of
 #: its parameters; the grid still defines the configurations the study runs on
 #: (see :mod:`pendulum_lqg.analysis.studies`).
@@ -126,6 +126,9 @@ class Configuration:
     #: the configuration is made (the experiment is parsed, right after the plugin was imported);
     #: a unit refuses to run on another source, and its record keeps it
     plugin_source: str | None = None
+    #: an LTI plant file (absolute path) simulated instead of the cart-pole
+    #: (:mod:`pendulum_lqg.bench.lti`)
+    lti_file: str | None = None
 
     def __post_init__(self) -> None:
         if self.plugin is not None and self.plugin_source is None:
@@ -141,6 +144,11 @@ class Configuration:
         """``(Scenario, DesignSpec)`` of this configuration (validated)."""
         from pendulum_lqg.core.scenario import Scenario
 
+        if self.lti_file is not None:
+            from pendulum_lqg.bench.lti import lti_build
+
+            return lti_build(self)
+
         noise = NoiseModel(**self.noise)
         overrides = ModelOverrides.from_mapping(self.model)
         scenario = Scenario(noise=noise, overrides=overrides, **self.scenario)
@@ -155,6 +163,11 @@ class Configuration:
         none)."""
         from pendulum_lqg.plant import load_plant
 
+        if self.lti_file is not None:
+            from pendulum_lqg.bench.lti import lti_plant
+
+            lti = lti_plant(self.lti_file)
+            return lti, lti
         if scenario is None:
             scenario, _ = self.build()
         overrides = scenario.overrides
@@ -171,6 +184,13 @@ class Configuration:
         from pendulum_lqg.policy import delay_periods
 
         scenario, spec = self.build()       # the Scenario checks the duration ceiling
+        if self.lti_file is not None:
+            from pendulum_lqg.bench.lti import lti_policy
+            from pendulum_lqg.core.layout import layout
+
+            layout(self.plants()[1], scenario)          # what its loop cannot run, refused now
+            lti_policy(self, scenario, spec)
+            return
         steps_per_period(_simulated_plant(self.model_file, scenario.overrides),
                          scenario.control_period)
         if self.plugin is None:             # a plugin's factory runs with its units only
@@ -258,9 +278,10 @@ class ExperimentSpec:
         sources: a resumed sweep must have the same one (the units whose plugin changed since
         are then stale, see :meth:`plugin_source`)."""
         blob = json.dumps(self.source, sort_keys=True, default=str).encode()
-        model = self.configurations[0].model_file if self.configurations else None
-        if model is not None:
-            blob += Path(model).read_bytes()
+        first = self.configurations[0] if self.configurations else None
+        for file in (first.model_file, first.lti_file) if first is not None else ():
+            if file is not None:
+                blob += Path(file).read_bytes()
         return hashlib.sha256(blob).hexdigest()[:16]
 
     @staticmethod
@@ -448,6 +469,11 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
         if other in data and other != study:
             raise ConfigError(f"{other}: a [{other}] table needs study = {other!r}")
     model_file = _model_file(data.get("model_file"), base_dir)
+    from pendulum_lqg.bench.lti import check_lti_experiment, lti_file
+
+    lti = lti_file(data.get("lti_file"), base_dir)
+    if lti is not None:
+        check_lti_experiment(data)
     episodes = _as_int("episodes", data.get("episodes", 100), 1)
     seed = _as_int("seed", data.get("seed", 0), 0)
     chunk = _as_int("chunk", data.get("chunk", 250), 1)
@@ -466,7 +492,8 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
             tables, plugin = _grid_point(values, base, base_dir)
             cfg = Configuration(index=i, values=values, scenario=tables["scenario"],
                                 noise=tables["noise"], design=tables["design"],
-                                model=tables["model"], plugin=plugin, model_file=model_file)
+                                model=tables["model"], plugin=plugin, model_file=model_file,
+                                lti_file=lti)
             cfg.validate()  # every configuration now, not in the middle of a sweep
         except PendulumLQGError as exc:
             raise _located(exc, base, values) from exc
@@ -516,7 +543,12 @@ def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, An
     nominal, simulated = unit.config.plants(scenario)
     if unit.config.plugin is not None:       # the code the experiment's fingerprint describes
         check_source(unit.config.plugin, unit.config.plugin_source)
-    policy = build_policy(unit.config.plugin, plant=nominal, scenario=scenario, spec=spec)
+    if unit.config.lti_file is not None:
+        from pendulum_lqg.bench.lti import lti_policy
+
+        policy = lti_policy(unit.config, scenario, spec)
+    else:
+        policy = build_policy(unit.config.plugin, plant=nominal, scenario=scenario, spec=spec)
     res = run_episodes(simulated, scenario, policy, seed=unit.seed,
                        episodes=range(unit.start, unit.stop), nthread=nthread)
     out = []

@@ -38,7 +38,7 @@ from pendulum_lqg import SCHEMA_VERSION, __version__
 from pendulum_lqg.bench.experiments import check_name
 from pendulum_lqg.boundary import read_bytes
 from pendulum_lqg.boundary.schemas import unit_record
-from pendulum_lqg.core.metrics import EPISODE_FIELDS, summarize
+from pendulum_lqg.core.metrics import EPISODE_FIELDS, summarize, summary_metrics
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.files import FileLock, atomic_write, read_csv, rows_to_csv
 
@@ -254,7 +254,17 @@ class ResultsDir:
 
 def unit_columns(unit: WorkUnit) -> list[str]:
     """The columns of a unit's CSV: ``config``, the grid keys, then the episode fields."""
-    return ["config", *unit.config.values, *EPISODE_FIELDS]
+    return ["config", *unit.config.values, *config_fields(unit.config)]
+
+
+def config_fields(cfg: Configuration) -> tuple[str, ...]:
+    """The episode fields of a configuration: the cart-pole's, or an LTI plant's (named after
+    its states)."""
+    if cfg.lti_file is None:
+        return EPISODE_FIELDS
+    from pendulum_lqg.bench.lti import lti_fields
+
+    return lti_fields(cfg)
 
 
 def _unit_record(unit: WorkUnit, spec: ExperimentSpec, data: bytes) -> dict[str, Any]:
@@ -305,7 +315,8 @@ def summarize_configs(spec: ExperimentSpec, rows: list[dict[str, Any]]) -> dict[
     for cfg in spec.configurations:
         mine = [r for r in rows if r["config"] == cfg.index]
         entry = {"index": cfg.index, "values": cfg.values, "label": cfg.label,
-                 "summary": summarize(mine) if mine else None, "theory": config_theory(cfg)}
+                 "summary": summarize(mine, summary_metrics(config_fields(cfg))) if mine else None,
+                 "theory": config_theory(cfg)}
         out["configurations"].append(entry)
     return out
 
@@ -320,6 +331,10 @@ def config_theory(cfg: Configuration) -> dict[str, Any] | None:
 
     if cfg.plugin is not None:
         return None
+    if cfg.lti_file is not None:
+        from pendulum_lqg.bench.lti import lti_theory_entry
+
+        return lti_theory_entry(cfg)
     try:
         scenario, spec = cfg.build()
         nominal, simulated = cfg.plants(scenario)
@@ -349,6 +364,8 @@ def _theory_cell(theory: dict[str, Any], key: str) -> str:
 
 def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
     """The summary as a Markdown table (one row per configuration)."""
+    if spec.configurations and spec.configurations[0].lti_file is not None:
+        return _lti_markdown_table(spec, summary)
     configs = summary["configurations"]
     keys = list(spec.configurations[0].values) if spec.configurations else []
     head = [*keys, "success [95 % CI]", "J (successes)", "RMS θ [rad]", "theory", "max abs θ [rad]",
@@ -372,5 +389,41 @@ def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
             f"{s['saturated_fraction']['mean']:.1%}", _fmt(s["rms_est_err_theta"]),
             _theory_cell(th, "rms_est_err_theta"), _fmt(s["rms_est_err_p_dot"]),
             f"{th['spectral_radius']:.4f}" if th else "–", fails]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _lti_markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
+    """The summary of an experiment on an LTI plant: per state its RMS and the theory's, per
+    state the RMS estimation error and the theory's (the state names of the plant's file)."""
+    cfg0 = spec.configurations[0]
+    fields = config_fields(cfg0)
+    states = [f.removeprefix("rms_est_err_") for f in fields if f.startswith("rms_est_err_")]
+    keys = list(cfg0.values)
+    head = [*keys, "success [95 % CI]", "J (successes)",
+            *(h for s in states for h in (f"RMS {s}", "theory")), "RMS u", "theory", "saturated",
+            *(h for s in states for h in (f"RMS error {s}", "theory")), "loop radius",
+            "failures"]
+    lines = [f"**{spec.name}** — LTI plant `{Path(str(cfg0.lti_file)).name}`, {spec.episodes} "
+             f"episodes per configuration, seed {spec.seed}; each *theory* column is the "
+             "stationary value of the loop (`pendulum-lqg theory --lti`), the loop radius its "
+             "spectral radius", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for c in summary["configurations"]:
+        s = c["summary"]
+        if s is None:
+            continue
+        lo, hi = s["success_ci95"]
+        th = c.get("theory") or {}
+        cells = [str(c["values"][k]) for k in keys] + [
+            f"{s['success_rate']:.1%} [{lo:.1%}, {hi:.1%}]", _fmt(s["cost"])]
+        for prefix in ("rms_", None, "rms_est_err_"):
+            if prefix is None:
+                cells += [_fmt(s["rms_u"]), _theory_cell(th, "rms_u"),
+                          f"{s['saturated_fraction']['mean']:.1%}"]
+                continue
+            for name in states:
+                cells += [_fmt(s[prefix + name]), _theory_cell(th, prefix + name)]
+        cells += [f"{th['spectral_radius']:.4f}" if th else "–",
+                  ", ".join(f"{k} {v}" for k, v in sorted(s["failures"].items())) or "–"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

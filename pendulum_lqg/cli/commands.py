@@ -23,6 +23,13 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise cfg_error("--policy: give either --policy or --controller/--observer, not both")
     name = (args.policy if args.policy is not None   # --policy '' is refused, not the default
             else f"{args.controller or 'dlqr'}+{args.observer or 'kalman'}")
+    if args.lti is not None:                     # a plant given as matrices, the same loop
+        from pendulum_lqg.cli.lti import lti_report, lti_run_setup
+
+        lti, lti_sc, lti_policy, lti_config = lti_run_setup(args, name)
+        with _watchdog(args):
+            lti_res = _run_in_batches(lti, lti_sc, lti_policy, args, trajectory=False)
+        return lti_report(args, lti_config, lti_sc, lti_res.rows)
     plant = load_plant(args.model)
     noise = noise_from_args(args, scale=args.noise_scale)
     scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,

@@ -216,6 +216,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the simulated plant: MuJoCo, or the model's linearisation discretised "
                         "exactly (linear-zoh) or by the lecture's forward Euler at the control "
                         "period (linear-euler) (default mujoco)")
+    p.add_argument("--lti", default=None, metavar="FILE",
+                   help="simulate a plant given as matrices (TOML or .npz, e.g. "
+                        "experiments/lti/double_integrator.toml) instead of the cart-pole: its own "
+                        "exact sampled model, period, x0, noise, cost and limits (as theory "
+                        "--lti); policies dlqr/lqr + none/kalman/kalman-predictor/luenberger")
     g = p.add_argument_group("sensing and actuation")
     g.add_argument("--measurement-delay", type=_number, default=0.0, metavar="S",
                    help="age of the measurement the policy receives, in s (a whole number of "

@@ -15,6 +15,11 @@ of each running row:
    the failure rule checks every physics step; the period's cost is integrated and streamed into
    the per-episode metrics (:class:`~pendulum_lqg.core.metrics.MetricsAccumulator`).
 
+The plant is the cart-pole (MuJoCo or its linearisation) or a linear plant given as matrices
+(:mod:`pendulum_lqg.lti`): :mod:`~pendulum_lqg.core.layout` says what differs (the lengths and
+names of x and y, ``y = C x``, the initial state, the noise covariances, the cost weights, the
+failure limits); the loop and its rules are the same.
+
 The rows of one call may be any number, one included: the single Gymnasium env is a one-row
 simulator (:meth:`Simulator.step_one` is :meth:`Simulator.step` without the metrics and the
 :class:`StepResult`, through the same :meth:`Simulator._advance` and the same rules).
@@ -29,6 +34,7 @@ from typing import Literal
 import numpy as np
 
 from pendulum_lqg.core import rules
+from pendulum_lqg.core.layout import layout
 from pendulum_lqg.core.metrics import MetricsAccumulator
 from pendulum_lqg.core.noise import DRAW_LOCK, NoiseStream
 from pendulum_lqg.core.period import PeriodBuffer, PeriodView, as_slice
@@ -45,11 +51,11 @@ class StepResult:
 
     Attributes
     ----------
-    x : (n, 4) true state at the end of the period (after state noise)
+    x : (n, n_x) true state at the end of the period (after state noise; the cart-pole's 4)
     cost : (n,) cost accumulated over the period
     failed : (n,) bool, the episode ended in this period (read-only, as ``reason``)
     reason : (n,) int failure codes (``rules.FAIL_*``)
-    states : (n, k, 4) physics-rate states over the period (a view, valid until the next step)
+    states : (n, k, n_x) physics-rate states over the period (a view, valid until the next step)
     requested : (n,) the requested force after saturation (before the actuator's delay line
         and lag): what a Gymnasium env reports as ``info["force"]``
     forces : (n, k) the force applied over each physics step (after saturation, actuator delay
@@ -70,7 +76,8 @@ class Simulator:
 
     Parameters
     ----------
-    plant : the simulated plant
+    plant : the simulated plant: the cart-pole's :class:`~pendulum_lqg.plant.Plant` or an
+        :class:`~pendulum_lqg.lti.LTIPlant` (with ``scenario.plant = "linear-zoh"``)
     scenario : timing, noise, initial state, failure rule and cost
     backend : ``"rollout"`` (``mujoco.batch`` over the batch, several threads) or ``"step"``
         (a plain ``mj_step`` loop); a scenario with a linear ``plant`` uses the linear backend
@@ -95,11 +102,15 @@ class Simulator:
         self.dt = self.k * self.h
         self.n_periods = scenario.n_periods
         _, self.track, self.u_max = rules.limits(plant, scenario)     # the limits in force
-        self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h)
+        self.layout = lay = layout(plant, scenario)
+        self.nx = lay.n
+        self._C, self._state_limits = lay.C, lay.state_limits
+        self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h,
+                                 covariances=lay.covariances)
         # The cost weights h·[diag(Q), R]: a period's cost is Σ weights·z² over its physics steps.
-        self.weights = rules.cost_weights(scenario.cost_Q, scenario.cost_R, self.h)
+        self.weights = rules.cost_weights(lay.cost_Q, lay.cost_R, self.h)
         self._bounds = rules.failure_bounds(theta_max=scenario.theta_max, track_limit=self.track,
-                                            u_max=self.u_max)
+                                            u_max=self.u_max, state_limits=lay.state_limits)
         self._force_noise = scenario.noise.process == "force" and self.noise.enabled
         self._state_noise = scenario.noise.process == "state" and self.noise.enabled
         self._nthread = thread_count(nthread)
@@ -110,7 +121,10 @@ class Simulator:
         self._streamed = bool(streamed_metrics)
         self._u1 = np.zeros(1)                      # step_one's force as a one-row array
         self.metrics: MetricsAccumulator | None = None
-        self.sensing = SensingActuation(plant, scenario, self.k)
+        self.sensing = SensingActuation(plant, scenario, self.k, outputs=lay.p)
+        # measure_one's own path: plain sensing of y = [p, θ] (else it is measure()'s first row)
+        self._plain_one = self.sensing.plain_sensing and self._C is None
+        self._theta_max = scenario.theta_max
 
     # ---- lifecycle ---------------------------------------------------------------------------
     def close(self) -> None:
@@ -152,9 +166,10 @@ class Simulator:
     def reset(self, generators: list[np.random.Generator], *, ids: np.ndarray | None = None,
               rows: np.ndarray | None = None, initial_states: np.ndarray | None = None,
               private_generators: bool = False) -> np.ndarray:
-        """Start episodes; returns the initial true states (n, 4).
+        """Start episodes; returns the initial true states (n, n_x).
 
-        Each generator first draws the initial state (4 normals), then the noise blocks.
+        Each generator first draws the initial state (n_x normals: the cart-pole's 4), then the
+        noise blocks.
 
         Parameters
         ----------
@@ -162,18 +177,18 @@ class Simulator:
         ids : episode numbers for the metrics (default ``0..n-1``)
         rows : reset only these rows of the running batch (vector envs' autoreset); ``ids``
             must then be given for them too
-        initial_states : (n, 4) explicit initial states instead of the scenario's distribution
-            (grids such as region-of-attraction maps); the 4 normals are drawn all the same so
+        initial_states : (n, n_x) explicit initial states instead of the scenario's distribution
+            (grids such as region-of-attraction maps); the n_x normals are drawn all the same so
             the noise that follows is unchanged
         private_generators : nothing draws from the generators after these episodes (a batch
             run), so the noise is drawn no further than the scenario's last period (the same
             numbers; see :meth:`NoiseStream.reset`'s ``horizon``). Not for Gymnasium envs, whose
             next episode continues the generator.
         """
-        sc = self.scenario
+        sc, lay, nx = self.scenario, self.layout, self.nx
         with DRAW_LOCK:                           # one draw per generator: see DRAW_LOCK
-            z = np.array([g.standard_normal(4) for g in generators]).reshape(-1, 4)
-        x0 = np.asarray(sc.x0) + np.asarray(sc.x0_std) * z
+            z = np.array([g.standard_normal(nx) for g in generators]).reshape(-1, nx)
+        x0 = lay.x0 + lay.x0_std * z
         if initial_states is not None:
             given = np.asarray(initial_states, dtype=float)
             if given.shape != x0.shape or not np.all(np.isfinite(given)):
@@ -191,7 +206,7 @@ class Simulator:
             if self._streamed:
                 self.metrics = MetricsAccumulator(
                     self.ids.max(initial=-1) + 1, h=self.h, k=self.k, weights=self.weights,
-                    u_max=self.u_max, settle_band=sc.settle_band)
+                    u_max=self.u_max, settle_band=sc.settle_band, layout=lay)
             self._w = np.zeros((n, self.noise.n_proc))
         else:
             rows = np.asarray(rows)
@@ -219,7 +234,8 @@ class Simulator:
         return self._nthread
 
     def measure(self, rows: np.ndarray | None = None) -> np.ndarray:
-        """Draw this period's noise and return the measurement ``y = [p, θ] + v`` (n, 2).
+        """Draw this period's noise and return the measurement ``y = [p, θ] + v`` (n, 2) (an LTI
+        plant's ``y = C x + v``, (n, p)).
 
         ``rows`` measures only those rows (len(rows), 2) and draws noise for them only — for vector
         envs, whose rows end and restart at different periods. Every row must be measured once
@@ -227,7 +243,7 @@ class Simulator:
         """
         if rows is None:
             self._w, v = self.noise.draw()
-            y = self.x[:, :2] + v
+            y = (self.x[:, :2] if self._C is None else self.x @ self._C.T) + v
             if self.sensing.plain_sensing:
                 return y
             return self.sensing.sense(y, np.arange(self.n), self.period)
@@ -235,13 +251,13 @@ class Simulator:
         w, v = self.noise.draw(rows)
         self._w = self._w.copy()             # it may be a view of the noise block
         self._w[rows] = w
-        y = self.x[rows, :2] + v
+        y = (self.x[rows, :2] if self._C is None else self.x[rows] @ self._C.T) + v
         return y if self.sensing.plain_sensing else self.sensing.sense(y, rows, self.period[rows])
 
     def measure_one(self) -> np.ndarray:
         """:meth:`measure` of a one-row simulator (the single Gymnasium env): ``y`` (2,), the
         same numbers as ``measure()[0]``."""
-        if not self.sensing.plain_sensing:
+        if not self._plain_one:
             return self.measure()[0]
         self._w, v = self.noise.draw()
         return self.x[0, :2] + v[0]
@@ -253,7 +269,7 @@ class Simulator:
         ----------
         u : (n,) requested forces [N] (saturated here to the actuator range; a non-finite one
             ends its episode as ``diverged``)
-        x_hat : (n, 4) the estimate the controller used at this sample, for the estimation-error
+        x_hat : (n, n_x) the estimate the controller used at this sample, for the estimation-error
             metric (optional)
         """
         u = _real_forces(u)
@@ -265,7 +281,7 @@ class Simulator:
         requested = rules.saturate(u, self.u_max)
         v, command, reset = self._advance(requested)
         failed, reason, fail_step = rules.detect_failure(
-            v, reset, theta_max=self.scenario.theta_max, track_limit=self.track, bad_force=bad)
+            v, reset, self._theta_max, self.track, self._state_limits, bad_force=bad)
         return self._finish_period(v, command, requested, x_hat, failed, reason, fail_step)
 
     def step_one(self, u: float) -> tuple[float, int, float]:
@@ -281,8 +297,9 @@ class Simulator:
         u = rules.saturate(float(u), self.u_max)
         self._u1[0] = u
         v, _, reset = self._advance(self._u1)
-        _, reason, fail_step = rules.detect_failure(
-            v, reset, theta_max=self.scenario.theta_max, track_limit=self.track)
+        # (positional: binding keywords costs the env's every step more than the call's work)
+        _, reason, fail_step = rules.detect_failure(v, reset, self._theta_max, self.track,
+                                                    self._state_limits)
         if fail_step is None:                           # no row failed: the reason is FAIL_NONE
             cost, code = rules.period_cost(v.z, self.weights).item(), rules.FAIL_NONE
         else:
@@ -326,7 +343,7 @@ class Simulator:
         """Cost and metrics of the period in ``v``; advance time and state. ``u``: the command
         reaching the actuator of each row, ``requested`` the requested force after saturation."""
         if self.metrics is not None:
-            x_fail = None if fail_step is None else v.buf[np.arange(v.n), fail_step + 1, :4]
+            x_fail = None if fail_step is None else v.buf[np.arange(v.n), fail_step + 1, :self.nx]
             cost = self.metrics.accumulate(self._id_index, v.z, u, x_hat, failed, reason,
                                            fail_step, self.t, x_fail)
         else:

@@ -11,26 +11,58 @@ including the step in which the episode failed):
 * ``settling_time`` — the last time ``|θ|`` was above the scenario's ``settle_band`` (0 if never);
 * ``time_to_failure`` — time of the first failing physics step (``nan`` for a success).
 
+These are the cart-pole's columns (:data:`EPISODE_FIELDS`). An LTI plant's
+(:mod:`~pendulum_lqg.core.layout`) are named after its file's states: ``rms_NAME`` and
+``max_abs_NAME`` of every state, ``rms_est_err_NAME``, and no settling time (it has no pole
+angle) — :func:`episode_fields`.
+
 Aggregates: success rate with its 95 % Wilson score interval; mean ± standard error for the rest.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from pendulum_lqg.core.rules import FAIL_NONE, FAIL_REASONS, period_integrals
+from pendulum_lqg.plant import STATE_NAMES
 
-EST_FIELDS = ("rms_est_err_p", "rms_est_err_theta", "rms_est_err_p_dot", "rms_est_err_theta_dot")
+if TYPE_CHECKING:
+    from pendulum_lqg.core.layout import Layout
 
-#: Columns of one episode row, in order.
-EPISODE_FIELDS: tuple[str, ...] = (
-    "episode", "seed", "success", "failure_reason", "time_to_failure", "duration", "cost",
-    "rms_theta", "max_abs_theta", "rms_p", "max_abs_p", "rms_u", "max_abs_u",
-    "saturated_fraction", *EST_FIELDS, "settling_time",
-)
+
+def est_fields(states: tuple[str, ...]) -> tuple[str, ...]:
+    """The estimation-error columns of a plant with these state names."""
+    return tuple(f"rms_est_err_{s}" for s in states)
+
+
+def episode_fields(reported: tuple[str, ...], states: tuple[str, ...], *,
+                   settle: bool) -> tuple[str, ...]:
+    """The columns of one episode row: ``reported`` the states with RMS and max columns, in
+    order; ``states`` every state (the estimation errors); ``settle`` a settling-time column."""
+    per_state = [f"{kind}_{s}" for s in reported for kind in ("rms", "max_abs")]
+    return ("episode", "seed", "success", "failure_reason", "time_to_failure", "duration", "cost",
+            *per_state, "rms_u", "max_abs_u", "saturated_fraction", *est_fields(states),
+            *(("settling_time",) if settle else ()))
+
+
+def layout_fields(layout: Layout) -> tuple[str, ...]:
+    """The episode columns of a plant's :class:`~pendulum_lqg.core.layout.Layout`."""
+    return episode_fields(tuple(layout.states[c] for c in layout.order), layout.states,
+                          settle=layout.settle is not None)
+
+
+def summary_metrics(fields: tuple[str, ...]) -> tuple[str, ...]:
+    """The metrics :func:`summarize` aggregates for episode rows with these columns."""
+    return (*fields[fields.index("cost"):], "time_to_failure")
+
+
+EST_FIELDS = est_fields(STATE_NAMES)
+
+#: Columns of one episode row of the cart-pole, in order.
+EPISODE_FIELDS: tuple[str, ...] = episode_fields(("theta", "p"), STATE_NAMES, settle=True)
 
 
 def _update(ids: np.ndarray | slice, arr: np.ndarray, op: Any, v: Any) -> None:
@@ -53,32 +85,37 @@ class MetricsAccumulator:
     weights : (5,) ``h·[diag(Q), R]`` (see :func:`~pendulum_lqg.core.rules.period_integrals`)
     u_max : actuator limit [N] (the saturated-time metric)
     settle_band : the ``|θ|`` band of the settling time [rad]
+    layout : the plant's :class:`~pendulum_lqg.core.layout.Layout` (default: the cart-pole's)
 
     ``ids`` given to :meth:`accumulate` may be an integer array or a ``slice`` (the batch's rows
     are episodes ``start … stop−1`` in order: in-place sums, no gather and scatter).
     """
 
-    _SUMS = ("alive", "cost", "theta2", "p2", "u2", "sat", "n_est", "settle",
-             "max_theta", "max_p", "max_u", "fail_time")
-    # the running sums (one entry per episode id), made by _alloc from _SUMS
+    _SUMS = ("alive", "cost", "u2", "sat", "n_est", "settle", "max_u", "fail_time")
+    _ROWS = ("sq", "peak", "est2")
+    # the running sums (one entry per episode id), made by _alloc from _SUMS; per reported state
+    # column c (the layout's first ``m``): sq[:, c] = ∫ x_c² dt, peak[:, c] = max |x_c|
     alive: np.ndarray
     cost: np.ndarray
-    theta2: np.ndarray
-    p2: np.ndarray
     u2: np.ndarray
     sat: np.ndarray
     n_est: np.ndarray
     settle: np.ndarray
-    max_theta: np.ndarray
-    max_p: np.ndarray
     max_u: np.ndarray
     fail_time: np.ndarray
 
     def __init__(self, n: int, *, h: float, k: int, weights: np.ndarray, u_max: float,
-                 settle_band: float) -> None:
+                 settle_band: float, layout: Layout | None = None) -> None:
+        from pendulum_lqg.core.layout import CARTPOLE
+
         self.h, self.k = h, k
         self.weights, self.u_max = weights, u_max
         self.band = settle_band
+        lay = CARTPOLE if layout is None else layout
+        self.m, self.nx, self.order, self.settle_col = lay.reported, lay.n, lay.order, lay.settle
+        self.names = tuple(lay.states[c] for c in lay.order)
+        self.fields = layout_fields(lay)
+        self.est_fields = est_fields(lay.states)
         self._steps = np.arange(1, k + 1)[:, None]      # (k, 1): 1 … k, the settling-time index
         self._alloc(max(n, 1))
 
@@ -86,7 +123,8 @@ class MetricsAccumulator:
         self.size = n
         for name in self._SUMS:
             setattr(self, name, np.zeros(n))
-        self.est2 = np.zeros((n, 4))
+        self.sq, self.peak = np.zeros((n, self.m)), np.zeros((n, self.m))
+        self.est2 = np.zeros((n, self.nx))
         self.reason = np.zeros(n, dtype=np.int8)
         self.done = np.zeros(n, dtype=bool)
         self.fail_time[:] = np.nan
@@ -94,7 +132,7 @@ class MetricsAccumulator:
     def _grow(self, need: int) -> None:
         if need <= self.size:
             return
-        old = {name: getattr(self, name) for name in (*self._SUMS, "est2", "reason", "done")}
+        old = {name: getattr(self, name) for name in (*self._SUMS, *self._ROWS, "reason", "done")}
         self._alloc(max(need, 2 * self.size))
         for name, arr in old.items():
             getattr(self, name)[: arr.shape[0]] = arr
@@ -105,10 +143,9 @@ class MetricsAccumulator:
 
     def restart(self, ids: np.ndarray) -> None:
         self._grow(int(np.max(ids, initial=-1)) + 1)
-        for name in self._SUMS:
+        for name in (*self._SUMS, *self._ROWS):
             getattr(self, name)[ids] = 0.0
         self.fail_time[ids] = np.nan
-        self.est2[ids] = 0.0
         self.reason[ids] = FAIL_NONE
         self.done[ids] = False
 
@@ -118,39 +155,29 @@ class MetricsAccumulator:
                    x_fail: np.ndarray | None = None) -> np.ndarray:
         """Add one control period (``z``, ``fail_step``: see
         :func:`~pendulum_lqg.core.rules.period_integrals`; ``u`` (n,)
-        the applied force; ``x_fail`` (n, 4) the state at the end of each row's failing step —
+        the applied force; ``x_fail`` (n, n_x) the state at the end of each row's failing step —
         the sample that crossed the limit, counted in the ``max_abs_*`` metrics); returns the
         period's cost per row."""
-        h = self.h
-        x_start = z[:, 0, :4]
+        h, m = self.h, self.m
+        x_start = z[:, 0, :self.nx]
         z, t_alive, cost = period_integrals(z, fail_step, h=h, weights=self.weights)
         _update(ids, self.cost, np.add, cost)
         _update(ids, self.alive, np.add, t_alive)
-        theta, p = z[:, :, 1], z[:, :, 0]
-        _update(ids, self.theta2, np.add, h * np.einsum("nk,nk->n", theta, theta))
-        _update(ids, self.p2, np.add, h * np.einsum("nk,nk->n", p, p))
+        for c in self.order:                       # ∫ x_c² dt, column by column (the same sums)
+            col = z[:, :, c]
+            _update(ids, self.sq[:, c], np.add, h * np.einsum("nk,nk->n", col, col))
         _update(ids, self.u2, np.add, u * u * t_alive)
         _update(ids, self.sat, np.add, (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive)
-        # |p| and |θ| as (2, k, n), each component one contiguous block: the row maxima are then
+        # |x_c| as (m, k, n), each component one contiguous block: the row maxima are then
         # one reduction over the middle axis with long inner loops (on the (n, k) views numpy
         # loops over k = 10 numbers at a time); a max is exact, so its order changes nothing
-        a = np.abs(z[:, :, :2].transpose(2, 1, 0), order="C")
-        row_max = a.max(axis=1)                                  # (2, n): max |p|, max |θ|
-        _update(ids, self.max_p, np.maximum, row_max[0])
-        _update(ids, self.max_theta, np.maximum, row_max[1])
+        a = np.abs(z[:, :, :m].transpose(2, 1, 0), order="C")
+        row_max = a.max(axis=1)                                  # (m, n): max |x_c|
+        for c in self.order:
+            _update(ids, self.peak[:, c], np.maximum, row_max[c])
         _update(ids, self.max_u, np.maximum, np.abs(u))
-        # settling: the end of each row's last physics step with |θ| above the band. The alive
-        # part of z holds no nan (a nan state ends its episode at the step that made it), so a
-        # row's largest |θ| is above the band exactly when one of its steps is.
-        has = row_max[1] > self.band
-        if has.any():
-            # 1 + the index of each row's last step above the band (0: none), as an integer
-            last = np.multiply(a[1] > self.band, self._steps).max(axis=0)
-            settled = t + last * h
-            if isinstance(ids, slice):
-                np.copyto(self.settle[ids], settled, where=has)
-            else:
-                self.settle[ids[has]] = settled[has]
+        if self.settle_col is not None:
+            self._settling(ids, a[self.settle_col], row_max[self.settle_col], t)
         if x_hat is not None:
             err = x_hat - x_start
             with np.errstate(over="ignore", invalid="ignore"):     # a diverged row: inf is honest
@@ -160,19 +187,34 @@ class MetricsAccumulator:
         if fail_step is not None:
             f = self._index(ids)[failed]
             if x_fail is not None:          # the crossing sample (nan of a diverged row ignored)
-                self.max_theta[f] = np.fmax(self.max_theta[f], np.abs(x_fail[failed, 1]))
-                self.max_p[f] = np.fmax(self.max_p[f], np.abs(x_fail[failed, 0]))
+                self.peak[f] = np.fmax(self.peak[f], np.abs(x_fail[failed, :m]))
             self.fail_time[f] = t[failed] + (fail_step[failed] + 1) * h
             self.reason[f] = reason[failed]
             self.done[f] = True
         return cost
+
+    def _settling(self, ids: np.ndarray | slice, a: np.ndarray, row_max: np.ndarray,
+                  t: np.ndarray) -> None:
+        """The settling time: the end of each row's last physics step with ``|x_c|`` (the pole's
+        angle) above the band; ``a`` (k, n) the magnitudes, ``row_max`` (n,) their maxima. The
+        alive part of z holds no nan (a nan state ends its episode at the step that made it), so
+        a row's largest value is above the band exactly when one of its steps is."""
+        has = row_max > self.band
+        if has.any():
+            # 1 + the index of each row's last step above the band (0: none), as an integer
+            last = np.multiply(a > self.band, self._steps).max(axis=0)
+            settled = t + last * self.h
+            if isinstance(ids, slice):
+                np.copyto(self.settle[ids], settled, where=has)
+            else:
+                self.settle[ids[has]] = settled[has]
 
     @staticmethod
     def _index(ids: np.ndarray | slice) -> np.ndarray:
         return np.arange(ids.start, ids.stop) if isinstance(ids, slice) else ids
 
     def rows(self, ids: np.ndarray, seeds: np.ndarray | None = None) -> list[dict[str, Any]]:
-        """Episode records (``EPISODE_FIELDS``) for the given ids.
+        """Episode records (:attr:`fields`; the cart-pole's :data:`EPISODE_FIELDS`) for the ids.
 
         Computed column by column over the ids (the same IEEE divisions and square roots as one
         episode at a time, at a fraction of the per-number cost), then turned into dicts."""
@@ -180,21 +222,25 @@ class MetricsAccumulator:
         raw_alive = self.alive[ids]
         alive = np.where(raw_alive > 0, raw_alive, np.nan)
         n_est = self.n_est[ids]
+        columns: dict[str, list[Any]] = {}
         with np.errstate(divide="ignore", invalid="ignore"):
             est = np.sqrt(self.est2[ids] / n_est[:, None])
-            columns: dict[str, list[Any]] = {
-                "rms_theta": np.sqrt(self.theta2[ids] / alive).tolist(),
-                "rms_p": np.sqrt(self.p2[ids] / alive).tolist(),
-                "rms_u": np.sqrt(self.u2[ids] / alive).tolist(),
-                "saturated_fraction": (self.sat[ids] / alive).tolist(),
-            }
+            for c, name in zip(self.order, self.names, strict=True):
+                columns[f"rms_{name}"] = np.sqrt(self.sq[ids, c] / alive).tolist()
+                columns[f"max_abs_{name}"] = self.peak[ids, c].tolist()
+            columns["rms_u"] = np.sqrt(self.u2[ids] / alive).tolist()
+            columns["max_abs_u"] = self.max_u[ids].tolist()
+            columns["saturated_fraction"] = (self.sat[ids] / alive).tolist()
         est[n_est <= 0] = np.nan
+        for j, name in enumerate(self.est_fields):
+            columns[name] = est[:, j].tolist()
+        if self.settle_col is not None:
+            columns["settling_time"] = self.settle[ids].tolist()
         reason = self.reason[ids].tolist()
         time_to_failure, duration = self.fail_time[ids].tolist(), raw_alive.tolist()
-        cost, settle = self.cost[ids].tolist(), self.settle[ids].tolist()
-        max_theta, max_p = self.max_theta[ids].tolist(), self.max_p[ids].tolist()
-        max_u = self.max_u[ids].tolist()
+        cost = self.cost[ids].tolist()
         seed_list = [-1] * ids.size if seeds is None else np.asarray(seeds).tolist()
+        metrics = self.fields[7:]                    # after "cost", in order
         out: list[dict[str, Any]] = []
         for i, e in enumerate(ids.tolist()):
             row: dict[str, Any] = {
@@ -205,16 +251,9 @@ class MetricsAccumulator:
                 "time_to_failure": time_to_failure[i],
                 "duration": duration[i],
                 "cost": cost[i],
-                "rms_theta": columns["rms_theta"][i],
-                "max_abs_theta": max_theta[i],
-                "rms_p": columns["rms_p"][i],
-                "max_abs_p": max_p[i],
-                "rms_u": columns["rms_u"][i],
-                "max_abs_u": max_u[i],
-                "saturated_fraction": columns["saturated_fraction"][i],
-                **dict(zip(EST_FIELDS, est[i].tolist(), strict=True)),
-                "settling_time": settle[i],
             }
+            for name in metrics:
+                row[name] = columns[name][i]
             out.append(row)
         return out
 
@@ -240,14 +279,14 @@ def mean_se(values: np.ndarray) -> tuple[float, float]:
     return (float(v.mean()), se)
 
 
-SUMMARY_METRICS: tuple[str, ...] = (
-    "cost", "rms_theta", "max_abs_theta", "rms_p", "max_abs_p", "rms_u", "max_abs_u",
-    "saturated_fraction", *EST_FIELDS, "settling_time", "time_to_failure",
-)
+SUMMARY_METRICS: tuple[str, ...] = summary_metrics(EPISODE_FIELDS)
 
 
-def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
-    """Aggregate episode rows: success rate with Wilson 95 % CI, mean ± SE of each metric.
+def summarize(rows: list[dict[str, Any]], metrics: tuple[str, ...] = SUMMARY_METRICS,
+              ) -> dict[str, Any]:
+    """Aggregate episode rows: success rate with Wilson 95 % CI, mean ± SE of each metric
+    (``metrics``: the cart-pole's by default; an LTI plant's are :func:`summary_metrics` of its
+    columns).
 
     ``cost`` and ``settling_time`` are averaged over the successful episodes only (a failed
     episode's cost stops at the failure and would flatter it); the others over all episodes, and
@@ -265,7 +304,7 @@ def summarize(rows: list[dict[str, Any]]) -> dict[str, Any]:
         if r["failure_reason"]:
             reasons[str(r["failure_reason"])] = reasons.get(str(r["failure_reason"]), 0) + 1
     out["failures"] = reasons
-    for name in SUMMARY_METRICS:
+    for name in metrics:
         vals = np.array([float(r[name]) for r in rows], dtype=np.float64)
         if name in ("cost", "settling_time"):
             vals = vals[succ]

@@ -139,17 +139,24 @@ class NoiseStream:
     it to per-row positions. Both give the same numbers.
     """
 
-    def __init__(self, noise: NoiseModel, *, steps_per_period: int, dt: float, h: float) -> None:
+    def __init__(self, noise: NoiseModel, *, steps_per_period: int, dt: float, h: float,
+                 covariances: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         self.noise = noise
         self.k = steps_per_period
-        self.n_proc = 4 if noise.process == "state" else 2 * steps_per_period
-        self.width = self.n_proc + 2
         s = noise.scale
-        if noise.process == "state":
+        self._mix: np.ndarray | None = None          # see _lti_noise
+        if covariances is not None:
+            self.proc_std, self.meas_std = self._lti_noise(covariances, s)
+        elif noise.process == "state":
             self.proc_std = s * np.sqrt(np.asarray(noise.process_density) * dt)   # δx per period
         else:
             self.proc_std = s * np.sqrt(np.asarray(noise.process_density) / h)    # f per step
-        self.meas_std = s * np.sqrt(np.asarray(noise.measurement_variance))
+        if covariances is None:
+            self.meas_std = s * np.sqrt(np.asarray(noise.measurement_variance))
+        self.n_proc = (2 * steps_per_period if noise.process == "force" and covariances is None
+                       else self.proc_std.size)
+        self.n_meas = self.meas_std.size
+        self.width = self.n_proc + self.n_meas
         self.enabled = bool(s > 0 and (np.any(self.proc_std > 0) or np.any(self.meas_std > 0)))
         # std of each column of a period: process (force noise: [slider, hinge] per physics
         # step), then measurement
@@ -165,6 +172,23 @@ class NoiseStream:
         self._period = 0                             # ring: periods drawn by the batch so far
         self._group = np.zeros(0, dtype=np.int64)    # ring: each row's top-up group
         self._drawn: list[int] = []                  # ring: periods in the ring, per group
+
+    def _lti_noise(self, covariances: tuple[np.ndarray, np.ndarray], s: float,
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """An LTI plant's noise (:mod:`~pendulum_lqg.core.layout`): the state's jump over a period
+        ``δx ~ N(0, s²·Wd)`` and ``v ~ N(0, s²·V)``, each from as many unit normals as it has
+        entries. Diagonal covariances scale the normals column by column (as the cart-pole's); a
+        full one mixes them, ``[δx, v] = F z`` with ``F Fᵀ = s²·blockdiag(Wd, V)`` (Cholesky, or
+        ``U √Λ`` of the eigendecomposition of a singular one). Returns the standard deviations."""
+        covs = [np.asarray(c, dtype=float) for c in covariances]
+        if any(np.any(c != np.diag(np.diag(c))) for c in covs):    # some block is full: mix
+            Fw, Fv = (_factor(c) for c in covs)
+            p, m = Fw.shape[0], Fv.shape[0]
+            mix = np.zeros((p + m, p + m))
+            mix[:p, :p], mix[p:, p:] = Fw, Fv
+            self._mix = s * mix.T                    # a row of normals @ Fᵀ: one period's draw
+        proc, meas = (s * np.sqrt(np.diag(c)) for c in covs)
+        return proc, meas
 
     @property
     def n(self) -> int:
@@ -238,12 +262,14 @@ class NoiseStream:
         m, a = stop - start, start % c
         unit = self._unit[:m]
         split = min(m, c - a)                               # the part before the ring wraps
+        scale = np.multiply if self._mix is None else np.matmul     # (see _lti_noise)
+        by = self._scale if self._mix is None else self._mix
         with DRAW_LOCK:
             for r in rows:
                 self._gens[r].standard_normal(out=unit)
-                np.multiply(unit[:split], self._scale, out=self._block[a:a + split, r])
+                scale(unit[:split], by, out=self._block[a:a + split, r])
                 if split < m:
-                    np.multiply(unit[split:], self._scale, out=self._block[:m - split, r])
+                    scale(unit[split:], by, out=self._block[:m - split, r])
 
     def _draw_staggered(self) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`draw` of every row with a horizon: the ring, topped up one group at a time."""
@@ -277,7 +303,7 @@ class NoiseStream:
         """
         if not self.enabled:
             n = self.n if rows is None else len(rows)
-            return np.zeros((n, self.n_proc)), np.zeros((n, 2))
+            return np.zeros((n, self.n_proc)), np.zeros((n, self.n_meas))
         if self._horizon is not None:
             if rows is not None:
                 self._per_row()                          # raises: not with a horizon
@@ -328,6 +354,15 @@ class NoiseStream:
     def forces(self, w: np.ndarray) -> np.ndarray:
         """Generalised forces (len, k, 2) of a force-noise draw, one per physics step."""
         return w.reshape(-1, self.k, 2)
+
+
+def _factor(cov: np.ndarray) -> np.ndarray:
+    """F with ``F Fᵀ = cov`` (PSD): Cholesky, or ``U √Λ`` of a singular one."""
+    try:
+        return np.linalg.cholesky(cov)
+    except np.linalg.LinAlgError:                     # singular (noise on a subspace)
+        lam, U = np.linalg.eigh(cov)
+        return U * np.sqrt(np.clip(lam, 0.0, None))
 
 
 class UniformStream:

@@ -11,6 +11,9 @@ Layout of :class:`PeriodBuffer`, ``(capacity, k+2, 5)`` float64, C-contiguous: f
 So ``z[:, :k]`` is ``[x, u]`` at the start of each physics step — what the cost integrates — and
 ``z[:, 1:k+1, :4]`` the state after each step — what the failure rule checks. A backend writes the
 k states (rows 1 … k, columns 0 … 3), the loop the start state, the forces and the end state.
+
+An LTI plant of ``n_x`` states (:mod:`~pendulum_lqg.core.layout`) has rows ``z = [x, u]`` of
+``n_x + 1`` numbers, the same layout: the width is the length of the bounds row.
 """
 
 from __future__ import annotations
@@ -36,15 +39,17 @@ SMALL_MASK = 8192
 class PeriodBuffer:
     """The period buffer of a simulator with room for ``capacity`` rows (layout: module docstring).
 
-    ``bounds_row`` (5,): the failure rule's fast-check bounds of one ``z`` row
-    (:func:`~pendulum_lqg.core.rules.failure_bounds`), tiled over the buffer.
+    ``bounds_row`` (n_x+1,): the failure rule's fast-check bounds of one ``z`` row
+    (:func:`~pendulum_lqg.core.rules.failure_bounds`), tiled over the buffer; its length is the
+    width of a row.
     """
 
     def __init__(self, capacity: int, k: int, bounds_row: np.ndarray) -> None:
         self.capacity, self.k = capacity, k
-        self.buf = np.zeros((capacity, k + 2, 5))
+        width = bounds_row.shape[0]
+        self.buf = np.zeros((capacity, k + 2, width))
         size = self.buf.size
-        self.bounds = np.tile(bounds_row, size // 5)
+        self.bounds = np.tile(bounds_row, size // width)
         self.scratch = np.empty(size)
         self.inside = np.empty(size, dtype=bool)
         self._views: dict[int, PeriodView] = {}
@@ -78,9 +83,10 @@ class PeriodView:
         k = period.k
         self.n, self.k = n, k
         self.buf = b = period.buf[:n]
-        self.z, self.states, self.u = b[:, :k], b[:, 1:k + 1, :4], b[:, :k, 4]
+        nx = b.shape[2] - 1                           # the state's length (the cart-pole's 4)
+        self.z, self.states, self.u = b[:, :k], b[:, 1:k + 1, :nx], b[:, :k, nx]
         self.u_by_step = self.u.T                     # (k, n): a held force (n,) broadcasts in
-        self.start, self.last, self.end = b[:, 0, :4], b[:, k, :4], b[:, k + 1, :4]
+        self.start, self.last, self.end = b[:, 0, :nx], b[:, k, :nx], b[:, k + 1, :nx]
         size = b.size
         self.flat, self.bounds = b.reshape(-1), period.bounds[:size]
         self.scratch, self.inside = period.scratch[:size], period.inside[:size]
@@ -88,4 +94,5 @@ class PeriodView:
         # One row: its u at step 0 and rows 1 … k are one C-contiguous run of 5k numbers, which
         # read as k records [·, p, θ, ṗ, θ̇] — a backend recording [time, qpos, qvel] after each
         # step can write them in place (the times land in the u column, overwritten by the loop).
-        self.direct = b.reshape(-1)[4:4 + 5 * k].reshape(1, k, 5) if n == 1 else None
+        self.direct = (b.reshape(-1)[nx:nx + (nx + 1) * k].reshape(1, k, nx + 1) if n == 1
+                       else None)

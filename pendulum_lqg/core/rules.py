@@ -25,15 +25,19 @@ the state is not finite or runs away (``|x_i| > RUNAWAY``, or MuJoCo reset the d
 instability); the reason is ``pole_fell``, ``track_limit`` or ``diverged``. The end-of-period state
 (after the state noise) is checked for divergence too.
 
+An LTI plant (:mod:`pendulum_lqg.core.layout`) has no pole and no track: only its declared
+``state_limits`` (``|x_i| > limit_i``: ``state_limit``) and divergence end its episodes.
+
 The arrays these rules read are one control period of each row in the layout of
-:class:`~pendulum_lqg.core.period.PeriodBuffer`: ``(n, k+2, 5)`` rows of ``z = [p, θ, ṗ, θ̇, u]``
-at the start of the period, after each of the k physics steps, and at the end (after the state
-noise).
+:class:`~pendulum_lqg.core.period.PeriodBuffer`: ``(n, k+2, n_x+1)`` rows of ``z = [x, u]``
+(the cart-pole's ``[p, θ, ṗ, θ̇, u]``) at the start of the period, after each of the k physics
+steps, and at the end (after the state noise).
 """
 
 from __future__ import annotations
 
 import functools
+import math
 from typing import TYPE_CHECKING, overload
 
 import numpy as np
@@ -46,10 +50,11 @@ if TYPE_CHECKING:
 #: Any state component beyond this magnitude counts as divergence.
 RUNAWAY = 1e6
 
-FAIL_NONE, FAIL_POLE, FAIL_TRACK, FAIL_DIVERGED = 0, 1, 2, 3
-#: Failure codes (int8 in the arrays) and the names the results use.
+FAIL_NONE, FAIL_POLE, FAIL_TRACK, FAIL_DIVERGED, FAIL_STATE = 0, 1, 2, 3, 4
+#: Failure codes (int8 in the arrays) and the names the results use (``state_limit``: an LTI
+#: plant's declared limit).
 FAIL_REASONS: dict[int, str] = {FAIL_NONE: "", FAIL_POLE: "pole_fell", FAIL_TRACK: "track_limit",
-                                FAIL_DIVERGED: "diverged"}
+                                FAIL_DIVERGED: "diverged", FAIL_STATE: "state_limit"}
 
 
 # ---- limits -------------------------------------------------------------------------------------
@@ -60,10 +65,15 @@ def limits(plant: Plant, scenario: Scenario) -> tuple[float, float, float]:
     actuator ``ctrlrange``; any of them may be ``inf`` (the rule switched off). MuJoCo itself stops
     the cart at the slider's ``range`` and clips the force to ``ctrlrange``, so on the MuJoCo plant
     a larger limit would be a rule the physics never lets fire: it is refused (one line naming
-    the limit); the linear plants take any.
+    the limit); the linear plants take any. An LTI plant (:mod:`pendulum_lqg.lti`) has no pole and
+    no track (``θ_max`` and the track are ``inf``: its own ``state_limits`` are the failure rule,
+    :func:`detect_failure`) and its file's ``force_limit`` unless the scenario sets one.
     """
     from pendulum_lqg.errors import ConfigError
 
+    if getattr(plant, "is_lti", False):
+        return (math.inf, math.inf,
+                plant.u_max if scenario.force_limit is None else scenario.force_limit)
     track = plant.track_limit if scenario.track_limit is None else scenario.track_limit
     u_max = plant.u_max if scenario.force_limit is None else scenario.force_limit
     if scenario.plant == "mujoco":
@@ -102,10 +112,14 @@ def nonfinite_forces(u: np.ndarray) -> np.ndarray | None:
 
 
 # ---- failure ------------------------------------------------------------------------------------
-def failure_bounds(*, theta_max: float, track_limit: float, u_max: float) -> np.ndarray:
+def failure_bounds(*, theta_max: float, track_limit: float, u_max: float,
+                   state_limits: np.ndarray | None = None) -> np.ndarray:
     """The bounds ``[track, θ_max, RUNAWAY, RUNAWAY, 2·u_max]`` of one ``z`` row for the fast check
     :func:`all_inside`: strictly inside them no part of the failure rule can fire (a saturated force
-    is inside; a nan is never inside)."""
+    is inside; a nan is never inside). An LTI plant's row ``[x, u]``: ``[min(limit_i, RUNAWAY)…,
+    2·u_max]`` with its ``state_limits``."""
+    if state_limits is not None:
+        return np.append(np.minimum(state_limits, RUNAWAY), 2.0 * u_max)
     return np.array([track_limit, theta_max, RUNAWAY, RUNAWAY, 2.0 * u_max])
 
 
@@ -125,8 +139,8 @@ def all_inside(view: PeriodView) -> bool:
     return 0 not in inside.tobytes() if view.small else bool(inside.all())
 
 
-def detect_failure(view: PeriodView, reset: np.ndarray | None, *, theta_max: float,
-                   track_limit: float,
+def detect_failure(view: PeriodView, reset: np.ndarray | None, theta_max: float,
+                   track_limit: float, state_limits: np.ndarray | None = None,
                    bad_force: np.ndarray | None = None,
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """Which rows of the period in ``view`` fail, why, and at which physics step.
@@ -137,6 +151,9 @@ def detect_failure(view: PeriodView, reset: np.ndarray | None, *, theta_max: flo
     reset : (n,) bool, the rows MuJoCo reset after an instability (they diverged), or ``None``
         when no row was reset
     theta_max, track_limit : the failure limits [rad], [m]
+    state_limits : an LTI plant's (n_x,) limits: ``|x_i| > limit_i`` fails as ``state_limit``
+        in place of the pole and track rules (``theta_max``, ``track_limit`` then unused), or
+        ``None`` (the cart-pole)
     bad_force : (n,) bool rows whose requested force was not finite (:func:`nonfinite_forces`):
         they fail as ``diverged`` at step 0
 
@@ -154,8 +171,13 @@ def detect_failure(view: PeriodView, reset: np.ndarray | None, *, theta_max: flo
         mag = np.abs(view.states)                            # (n, k, 4) after each step
         # ``not (|x| <= RUNAWAY)`` is true for nan, inf and runaway values alike
         bad: np.ndarray = ~np.all(mag <= RUNAWAY, axis=2)
-        pole: np.ndarray = mag[:, :, 1] > theta_max
-        track: np.ndarray = mag[:, :, 0] >= track_limit
+        limit_code = FAIL_TRACK
+        if state_limits is None:
+            pole: np.ndarray = mag[:, :, 1] > theta_max
+            track: np.ndarray = mag[:, :, 0] >= track_limit
+        else:
+            pole, limit_code = np.zeros_like(bad), FAIL_STATE
+            track = np.any(mag > state_limits, axis=2)
         end_bad: np.ndarray = ~np.all(np.abs(view.end) <= RUNAWAY, axis=1)
     bad[:, -1] |= end_bad if reset is None else end_bad | reset
     if bad_force is not None:
@@ -167,7 +189,7 @@ def detect_failure(view: PeriodView, reset: np.ndarray | None, *, theta_max: flo
     fail_step = np.where(failed, np.argmax(any_fail, axis=1), k)
     idx = np.nonzero(failed)[0]
     s = fail_step[idx]
-    reason[idx] = np.where(bad[idx, s], FAIL_DIVERGED, np.where(pole[idx, s], FAIL_POLE, FAIL_TRACK))
+    reason[idx] = np.where(bad[idx, s], FAIL_DIVERGED, np.where(pole[idx, s], FAIL_POLE, limit_code))
     failed.flags.writeable = reason.flags.writeable = False
     return failed, reason, fail_step
 
@@ -183,7 +205,7 @@ def _none_failed(n: int) -> tuple[np.ndarray, np.ndarray, None]:
 
 # ---- cost ---------------------------------------------------------------------------------------
 def cost_weights(cost_Q: tuple[float, ...], cost_R: float, h: float) -> np.ndarray:
-    """``h·[diag(Q), R]`` (5,): the weights of one physics step's ``z²`` in the period cost."""
+    """``h·[diag(Q), R]`` (n_x+1,): the weights of one physics step's ``z²`` in the period cost."""
     return h * np.append(np.asarray(cost_Q, dtype=float), cost_R)
 
 

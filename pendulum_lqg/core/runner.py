@@ -190,7 +190,8 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: i
             u = driven.act(x_now if needs_state else y)
             x_hat = getattr(driven, "x_hat", None)
             if log is not None:
-                snap = dict(t=sim.t, x=x_now, y=y, **estimator_snapshot(driven, x_hat, sim.n))
+                snap = dict(t=sim.t, x=x_now, y=y, **estimator_snapshot(driven, x_hat, sim.n,
+                                                                        sim.nx, sim.layout.p))
             res = sim.step(u, x_hat=x_hat)
             if log is not None:     # u: the requested force after saturation; u_policy: before
                 log.add(sim.ids, u=res.requested, cost=res.cost, states=res.states,
@@ -205,7 +206,7 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: i
         rows = sim.metrics.rows(np.arange(n), np.array(seeds))
     for row, e in zip(rows, episodes, strict=True):
         row["episode"] = e
-    trajectories = log.split(n, seeds, rows) if log is not None else None
+    trajectories = log.split(n, seeds, rows, sim.layout.C) if log is not None else None
     if trajectories is not None:
         for tr, e in zip(trajectories, episodes, strict=True):
             tr.episode = e

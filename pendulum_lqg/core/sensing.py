@@ -4,7 +4,7 @@ All are off by default (``Scenario`` fields), and then nothing here runs: the lo
 sample-and-hold loop. Each feature keeps per-row state, batched, indexed by each row's own period,
 and emptied when a row (re)starts:
 
-* measurement delay ``d_m`` periods: a ring ``(n, d_m, 2)``; at sample n the policy gets the
+* measurement delay ``d_m`` periods: a ring ``(n, d_m, p)``; at sample n the policy gets the
   sample taken at n − d_m (nan until one has arrived);
 * dropouts: a lost sample becomes ``[nan, nan]``; one uniform per period from the episode's child
   generator (:func:`~pendulum_lqg.core.seeding.child_generator`), so the episode's noise stream is
@@ -42,10 +42,12 @@ class SensingActuation:
     plant : the simulated plant (the randomised models are variations of it)
     scenario : the delays, dropout, lag and randomisation to apply
     k : physics steps per control period
+    outputs : the length of the measurement y (the cart-pole's 2)
     """
 
-    def __init__(self, plant: Plant, scenario: Scenario, k: int) -> None:
+    def __init__(self, plant: Plant, scenario: Scenario, k: int, *, outputs: int = 2) -> None:
         self.plant, self.scenario = plant, scenario
+        self.outputs = outputs                                  # the length of y
         self.dm, self.da = scenario.measurement_delay_periods, scenario.actuator_delay_periods
         self.dropout = scenario.dropout
         self.randomized = not scenario.randomize.is_empty()
@@ -69,7 +71,7 @@ class SensingActuation:
             return
         if rows is None:
             n = len(generators)
-            self.y_ring = np.full((n, self.dm, 2), np.nan)     # nothing has arrived yet
+            self.y_ring = np.full((n, self.dm, self.outputs), np.nan)     # nothing has arrived yet
             self.u_ring = np.zeros((n, self.da))                # 0 N until the first force
             self.force = np.zeros(n)                            # the lag's output
         else:
@@ -98,7 +100,7 @@ class SensingActuation:
 
     def sense(self, y: np.ndarray, rows: np.ndarray, period: np.ndarray) -> np.ndarray:
         """Dropouts (lost samples become nan) and the measurement delay line of ``rows`` (their
-        current ``period``s) applied to this period's noisy samples ``y`` (len(rows), 2)."""
+        current ``period``s) applied to this period's noisy samples ``y`` (len(rows), p)."""
         if self.drops is not None:
             y[self.drops.draw(rows) < self.dropout] = np.nan
         if self.dm:

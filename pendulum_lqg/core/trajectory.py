@@ -12,7 +12,9 @@ class Trajectory:
     """One episode's trajectory (kept only when a caller asks, e.g. for a recording).
 
     Control-rate arrays have one row per control sample ``n`` (time ``t[n]``); ``states`` holds the
-    physics-rate states with times ``t_physics``.
+    physics-rate states with times ``t_physics``. The shapes are the cart-pole's; an LTI plant's
+    (:mod:`~pendulum_lqg.core.layout`) have its ``n_x`` states and ``p`` outputs in place of 4 and
+    2, and ``y_true = C x``.
 
     Attributes
     ----------
@@ -52,7 +54,10 @@ class TrajectoryLog:
     def add(self, ids: np.ndarray, **arrays: np.ndarray) -> None:
         self.frames.append({"ids": ids.copy(), **{k: np.array(v) for k, v in arrays.items()}})
 
-    def split(self, n: int, seeds: list[int], rows: list[dict[str, object]]) -> list[Trajectory]:
+    def split(self, n: int, seeds: list[int], rows: list[dict[str, object]],
+              C: np.ndarray | None = None) -> list[Trajectory]:
+        """One :class:`Trajectory` per episode; ``C`` the measurement matrix (``None``: the
+        cart-pole's ``y = [p, θ]``)."""
         out = []
         for e in range(n):
             parts: dict[str, list[np.ndarray]] = {}
@@ -67,13 +72,14 @@ class TrajectoryLog:
                                                          fr["ids"].shape[0] else arr)
             stack = {k: np.array(v) for k, v in parts.items()}
             cost = np.cumsum(stack["cost"])
-            states = stack["states"].reshape(-1, 4)
+            states = stack["states"].reshape(-1, stack["states"].shape[-1])
             k = stack["states"].shape[1]
             h = (stack["t"][1] - stack["t"][0]) / k if stack["t"].size > 1 else np.nan
             t_phys = (stack["t"][:, None] + h * np.arange(1, k + 1)[None, :]).ravel()
             out.append(Trajectory(
                 episode=e, seed=seeds[e], t=stack["t"], x=stack["x"], y=stack["y"],
-                y_true=stack["x"][:, :2], u=stack["u"], x_hat=stack["x_hat"],
+                y_true=stack["x"][:, :2] if C is None else stack["x"] @ C.T, u=stack["u"],
+                x_hat=stack["x_hat"],
                 x_prior=stack["x_prior"], innovation=stack["innovation"], P=stack["P"],
                 cost=cost, t_physics=t_phys, states=states, row=rows[e],
                 u_policy=stack.get("u_policy")))
@@ -82,15 +88,16 @@ class TrajectoryLog:
 
 
 
-def estimator_snapshot(policy: object, x_hat: np.ndarray | None, n: int,
-                        ) -> dict[str, np.ndarray]:
-    """The estimator intermediates a recording logs (nan where the policy has none)."""
+def estimator_snapshot(policy: object, x_hat: np.ndarray | None, n: int, nx: int = 4,
+                       ny: int = 2) -> dict[str, np.ndarray]:
+    """The estimator intermediates a recording logs (nan where the policy has none); ``nx``,
+    ``ny`` the lengths of x and y."""
     est = getattr(policy, "estimator", None)
-    nan4 = np.full((n, 4), np.nan)
+    nan_x = np.full((n, nx), np.nan)
     P = getattr(est, "P", None)
-    return {"x_hat": x_hat if x_hat is not None else nan4,
-            "x_prior": getattr(est, "x_prior", nan4),
-            "innovation": getattr(est, "innovation", np.full((n, 2), np.nan)),
-            "P": np.broadcast_to(P if P is not None else np.full((4, 4), np.nan), (n, 4, 4))}
+    return {"x_hat": x_hat if x_hat is not None else nan_x,
+            "x_prior": getattr(est, "x_prior", nan_x),
+            "innovation": getattr(est, "innovation", np.full((n, ny), np.nan)),
+            "P": np.broadcast_to(P if P is not None else np.full((nx, nx), np.nan), (n, nx, nx))}
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -24,16 +24,22 @@ class LinearPhysics:
     the failure rule and the cost integrate over) lie on the straight line to it, the last one
     exactly on it. State noise is added at the end of the period by the loop, as for MuJoCo; a
     linear plant has no force noise, no actuator lag and no randomised models (the scenario refuses
-    them).
+    them). An LTI plant given as matrices (:mod:`pendulum_lqg.lti`) is stepped by its own exact
+    sampled model ``x ← Φ x + Γ u``, once per control period (its physics step is T).
     """
 
     def __init__(self, plant: Plant, kind: str, k: int) -> None:
         from pendulum_lqg.design import euler, zoh
         from pendulum_lqg.linearize import linearize
 
+        self.kind, self.k = kind, k
+        self._frac = (np.arange(1, k + 1) / k)[None, :, None]
+        if getattr(plant, "is_lti", False):        # an LTIPlant: its own (Φ, Γ) at T, k = 1
+            lti: Any = plant                       # (pendulum_lqg.lti imports the core)
+            self.Phi, self.Gamma = lti.Phi, lti.Gamma[:, 0]
+            return
         lin = linearize(plant)
         h = plant.timestep
-        self.kind, self.k = kind, k
         if kind == "linear-zoh":
             self.Phi, Gamma = zoh(lin.A, lin.B, h)
         elif kind == "linear-euler":
@@ -41,7 +47,6 @@ class LinearPhysics:
         else:
             raise ConfigError(f"plant: expected 'linear-zoh' or 'linear-euler', got {kind!r}")
         self.Gamma = Gamma[:, 0]
-        self._frac = (np.arange(1, k + 1) / k)[None, :, None]
 
     def set_models(self, models: list[mujoco.MjModel]) -> None:
         raise ConfigError("randomize: per-episode models need plant = 'mujoco'")

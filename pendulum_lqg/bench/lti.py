@@ -1,0 +1,139 @@
+"""Experiments on a plant given as matrices: ``lti_file = "lti/double_integrator.toml"``.
+
+An experiment file that names an LTI plant file (:mod:`pendulum_lqg.lti`, relative to the
+experiment's folder) runs its grid on that plant instead of the cart-pole, through the same loop
+(:mod:`pendulum_lqg.core.layout`): the file gives the period, the initial state, the noise, the
+cost weights and the limits; the experiment chooses what a scenario chooses beside them::
+
+    name = "double_integrator"
+    lti_file = "lti/double_integrator.toml"
+    episodes = 200
+    [scenario]
+    duration = 20.0                  # also estimate0, force_limit, the delays, dropout
+    [grid]
+    policy = ["dlqr+kalman", "dlqr+luenberger"]    # dlqr/lqr + none/kalman/kalman-predictor/
+    noise_scale = [0.5, 1.0]                       # luenberger
+
+The cart-pole's keys (``x0``, ``theta_max``, ``[noise]`` densities, ``[model]``, ``model_file``,
+plug-ins, studies) are refused, one line each: the LTI file holds them.
+"""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+from typing import Any
+
+from pendulum_lqg.errors import ConfigError
+
+#: What an experiment on an LTI plant may set, per table (the file holds the rest).
+LTI_TABLE_KEYS: dict[str, tuple[str, ...]] = {
+    "scenario": ("duration", "estimate0", "force_limit", "measurement_delay", "actuator_delay",
+                 "dropout"),
+    "noise": ("scale",),
+    "design": ("controller", "observer"),
+    "model": (),
+}
+LTI_GRID_KEYS = ("policy", "controller", "observer", "noise_scale", "duration", "estimate0",
+                 "measurement_delay", "actuator_delay", "dropout", "delay", "delay_kind")
+
+
+def lti_file(value: object, base_dir: Path | None) -> str | None:
+    """``lti_file`` as an absolute path (relative to the experiment file's folder, else the
+    current folder), checked to exist."""
+    if value is None:
+        return None
+    if not isinstance(value, str) or not value:
+        raise ConfigError(f"lti_file: expected a path to an LTI plant file (TOML or .npz), got "
+                          f"{value!r}")
+    path = Path(value).expanduser()
+    if not path.is_absolute():
+        near = base_dir / path if base_dir is not None else None
+        path = near if near is not None and near.is_file() else Path.cwd() / path
+    if not path.is_file():
+        raise ConfigError(f"lti_file: no file {value!r}")
+    return str(path.resolve())
+
+
+def check_lti_experiment(data: dict[str, Any]) -> None:
+    """Refuse what an experiment on an LTI plant cannot set, one line naming the key."""
+    for key in ("model_file", "study"):
+        if key in data:
+            raise ConfigError(f"{key}: not with lti_file (the LTI file is the plant)")
+    for table, known in LTI_TABLE_KEYS.items():
+        for key in data.get(table, {}):
+            if key not in known:
+                raise ConfigError(f"{table}.{key}: not with lti_file (the LTI file holds it); "
+                                  f"[{table}] takes " + (", ".join(known) or "nothing"))
+    from pendulum_lqg.plugins import is_plugin_ref
+
+    for key in data.get("grid", {}):
+        if key not in LTI_GRID_KEYS:
+            raise ConfigError(f"grid.{key}: not with lti_file; the grid takes "
+                              + ", ".join(LTI_GRID_KEYS))
+    for value in data.get("grid", {}).get("policy", []):
+        if is_plugin_ref(value):
+            raise ConfigError(f"grid.policy: {value!r}: a plug-in takes the cart-pole's "
+                              "PolicyContext; with lti_file the built-in dlqr/lqr + none/kalman/"
+                              "kalman-predictor/luenberger")
+
+
+@functools.lru_cache(maxsize=16)
+def lti_plant(path: str) -> Any:
+    """The plant of an experiment's ``lti_file`` (read once per path while a grid runs)."""
+    from pendulum_lqg.lti import load_lti
+
+    return load_lti(path)
+
+
+def lti_build(cfg: Any) -> tuple[Any, Any]:
+    """``(Scenario, DesignSpec)`` of a configuration on an LTI plant."""
+    from pendulum_lqg.lti import lti_scenario
+    from pendulum_lqg.policy import DesignSpec
+
+    fields = dict(cfg.scenario)
+    scenario = lti_scenario(lti_plant(cfg.lti_file), noise_scale=cfg.noise.get("scale", 1.0),
+                            duration=fields.pop("duration", 10.0), **fields)
+    return scenario, DesignSpec(**cfg.design)
+
+
+def lti_policy(cfg: Any, scenario: Any, spec: Any) -> Any:
+    """The configuration's built-in policy designed on its LTI plant, saturating to the limit in
+    force."""
+    from pendulum_lqg.core.rules import limits
+    from pendulum_lqg.lti import design_lti_policy
+
+    plant = lti_plant(cfg.lti_file)
+    return design_lti_policy(plant, f"{spec.controller}+{spec.observer}",
+                             u_max=limits(plant, scenario)[2])
+
+
+def lti_fields(cfg: Any) -> tuple[str, ...]:
+    """The episode columns of a configuration on an LTI plant (named after its states)."""
+    from pendulum_lqg.core.layout import layout
+    from pendulum_lqg.core.metrics import layout_fields
+
+    scenario, _ = lti_build(cfg)
+    return layout_fields(layout(lti_plant(cfg.lti_file), scenario))
+
+
+def lti_theory_entry(cfg: Any) -> dict[str, Any] | None:
+    """The summary's ``theory`` entry of a configuration on an LTI plant: the stationary loop
+    (:func:`pendulum_lqg.lti.lti_theory`) in the Monte Carlo's column names; ``None`` with
+    delays or dropout (the theory does not model them)."""
+    from pendulum_lqg.lti import lti_theory
+
+    scenario, spec = lti_build(cfg)
+    if scenario.measurement_delay or scenario.actuator_delay or scenario.dropout:
+        return None
+    name = f"{spec.controller}+{spec.observer}"
+    plant = lti_plant(cfg.lti_file)
+    res = lti_theory(plant, (name,), noise_scale=scenario.noise.scale,
+                     duration=scenario.duration)[name]
+    out: dict[str, Any] = {"plant": f"lti:{plant.name}", "spectral_radius": res.spectral_radius,
+                           "stable": res.stable}
+    for s in plant.state_names:
+        out[f"rms_{s}"] = res.rms[s]
+        out[f"rms_est_err_{s}"] = res.estimate_error_std[s]
+    out.update(rms_u=res.u_std, cost_rate=res.cost_rate, cost_J=res.cost_J, verdict=res.verdict)
+    return out

@@ -1,0 +1,150 @@
+"""``pendulum-lqg run --lti FILE``: seeded episodes of a plant given as matrices
+(:mod:`pendulum_lqg.lti`) through the same loop as the cart-pole, summarised with the file's
+state names."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from typing import Any, cast
+
+import numpy as np
+
+from pendulum_lqg.cli.parser import cfg_error, jsonable
+
+#: Options of ``run`` that describe the cart-pole; with ``--lti`` the file says them instead
+#: (their value when not given, and what the file holds in their place).
+_CARTPOLE_ONLY = {"model": (None, "the file is the plant"), "theta0": (0.1, "the file's x0"),
+                  "q": (None, "the file's Q"), "r": (None, "the file's R"),
+                  "w": (None, "the file's W"), "v": (None, "the file's V"),
+                  "observer_poles": (None, "the file's observer_poles"),
+                  "process_noise": ("state", "the file's G and W"),
+                  "theta_max": (0.5, "the file's state_limits"),
+                  "track_limit": (None, "the file's state_limits"),
+                  "record": (None, "recordings draw the cart-pole"),
+                  "spawn": (False, "recordings draw the cart-pole"),
+                  "plot": (None, "the picture draws the cart-pole's states"),
+                  "randomize": (None, "it randomises the cart-pole's model")}
+
+
+#: The scenario fields an LTI plant runs with (the others describe the cart-pole; the file holds
+#: their counterparts, reported beside them in the configuration).
+_SCENARIO_FIELDS = ("control_period", "duration", "estimate0", "force_limit", "plant",
+                    "measurement_delay", "actuator_delay", "dropout")
+
+
+def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, dict[str, Any]]:
+    """``run`` with ``--lti FILE`` (``name``: the policy, ``controller+observer``): the plant, the
+    scenario, the policy and the configuration to report; ``cmd_run`` runs them."""
+    from pendulum_lqg.core.layout import layout
+    from pendulum_lqg.core.rules import limits
+    from pendulum_lqg.limits import MAX_RUN_EPISODES, check_at_most
+    from pendulum_lqg.lti import design_lti_policy, load_lti, lti_scenario
+
+    _check_options(args)
+    plant = load_lti(args.lti)
+    if not math.isclose(args.dt, plant.control_period) and args.dt != 0.01:
+        raise cfg_error(f"--dt: the LTI plant {plant.name!r} is sampled at "
+                        f"{plant.control_period:g} s (its file's control_period); leave --dt out")
+    scenario = lti_scenario(plant, duration=args.duration, noise_scale=args.noise_scale,
+                            estimate0=args.estimate0, force_limit=args.force_limit,
+                            measurement_delay=args.measurement_delay,
+                            actuator_delay=args.actuator_delay, dropout=args.dropout,
+                            actuator_tau=args.actuator_tau)
+    lay = layout(plant, scenario)
+    u_max = limits(cast(Any, plant), scenario)[2]        # (the core types its plants as Plant)
+    policy = design_lti_policy(plant, name, u_max=u_max)
+    check_at_most("--episodes", args.episodes, MAX_RUN_EPISODES,
+                  "run keeps every row in memory; bench streams larger studies to disk")
+    config = {"policy": name, "seed": args.seed, "episodes": args.episodes,
+              "lti": str(args.lti), "plant": plant.name, "states": list(lay.states),
+              "outputs": list(lay.outputs), "x0": lay.x0.tolist(), "x0_std": lay.x0_std.tolist(),
+              "force_limit": _limit(u_max),       # a switched-off limit: "inf", as in "scenario"
+              "state_limits": [_limit(v) for v in np.asarray(lay.state_limits).tolist()],
+              "scenario": {k: v for k, v in scenario.to_dict().items() if k in _SCENARIO_FIELDS}}
+    config["scenario"]["noise"] = {"scale": scenario.noise.scale}     # W and V: the file's
+    return plant, scenario, policy, config
+
+
+def lti_report(args: argparse.Namespace, config: dict[str, Any], scenario: Any,
+               rows: list[dict[str, Any]]) -> int:
+    """Print the summary of ``run --lti``'s episode ``rows`` (``--json``: every row too)."""
+    from pendulum_lqg import SCHEMA_VERSION
+    from pendulum_lqg.core.metrics import summarize, summary_metrics
+
+    fields = tuple(rows[0])
+    summary = summarize(rows, summary_metrics(fields))
+    if args.json:
+        out = {"schema_version": SCHEMA_VERSION, "config": config,
+               "success_rate": summary["success_rate"], "success_ci95": summary["success_ci95"],
+               "summary": summary, "episodes": rows}
+        print(json.dumps(jsonable(out), indent=2))
+    else:
+        _print_summary(config, scenario, summary, fields)
+    return 0
+
+
+def _limit(value: float) -> float | str:
+    return "inf" if math.isinf(value) else value
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse, one line each, the cart-pole's options given with ``--lti``."""
+    from pendulum_lqg.plugins import is_plugin_ref
+
+    if args.policy is not None and is_plugin_ref(args.policy):
+        raise cfg_error("--policy: with --lti, a built-in 'controller+observer' (dlqr/lqr + "
+                        "none/kalman/kalman-predictor/luenberger); plug-ins take the cart-pole's "
+                        "PolicyContext")
+    if args.plant not in ("mujoco", "linear-zoh"):        # mujoco: the option's default
+        raise cfg_error(f"--plant: an LTI plant runs as its own exact sampled model "
+                        f"(linear-zoh), got {args.plant!r}")
+    for option, (default, why) in _CARTPOLE_ONLY.items():
+        if getattr(args, option) != default:
+            flag = "--" + option.replace("_", "-")
+            raise cfg_error(f"{flag}: not with --lti ({why})")
+
+
+def _print_summary(config: dict[str, Any], scenario: Any, s: dict[str, Any],
+                   fields: tuple[str, ...]) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    from pendulum_lqg.core.metrics import summary_metrics
+
+    con = Console(highlight=False)
+    lo, hi = s["success_ci95"]
+    con.print(escape(f"{config['policy']} on the LTI plant {config['plant']} ({config['lti']}) — "
+                     f"{s['episodes']} episodes, seed {config['seed']}, "
+                     f"T = {scenario.control_period:g} s, {scenario.duration:g} s, noise scale "
+                     f"{scenario.noise.scale:g}, x0 = {config['x0']}, force limit "
+                     f"{config['force_limit']}"))
+    con.print(f"success: {s['successes']}/{s['episodes']} = {s['success_rate']:.1%} "
+              f"(95 % Wilson CI {lo:.1%} – {hi:.1%})"
+              + escape(f"; failures: {s['failures']}" if s["failures"] else ""))
+    t = Table()
+    t.add_column("metric")
+    t.add_column("mean ± s.e.")
+    for key in summary_metrics(fields):
+        m, se = s[key]["mean"], s[key]["se"]
+        cell = "–" if m != m else (f"{m:.4g}" if se != se else f"{m:.4g} ± {se:.2g}")
+        t.add_row(escape(_label(key)), cell)
+    con.print(t)
+
+
+def _label(key: str) -> str:
+    """A metric's row label: ``rms_est_err_position`` → "RMS estimate error of position"."""
+    if key == "cost":
+        return "J = ∫xᵀQx + uᵀRu dt (successes)"
+    if key == "saturated_fraction":
+        return "time saturated [share of the episode]"
+    if key == "time_to_failure":
+        return "time to failure [s] (failures)"
+    if key.startswith("max_abs_"):
+        return f"max |{key[8:]}|"
+    for prefix, text in (("rms_est_err_", "RMS estimate error of "), ("rms_", "RMS ")):
+        if key.startswith(prefix):
+            return text + key[len(prefix):]
+    return key
