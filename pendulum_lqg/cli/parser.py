@@ -220,7 +220,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="simulate a plant given as matrices (TOML or .npz, e.g. "
                         "experiments/lti/double_integrator.toml) instead of the cart-pole: its own "
                         "exact sampled model, period, x0, noise, cost and limits (as theory "
-                        "--lti); policies dlqr/lqr + none/kalman/kalman-predictor/luenberger")
+                        "--lti); policies dlqr/lqr + none/kalman/kalman-predictor/luenberger "
+                        "(default: none, the cart-pole)")
     g = p.add_argument_group("sensing and actuation")
     g.add_argument("--measurement-delay", type=_number, default=0.0, metavar="S",
                    help="age of the measurement the policy receives, in s (a whole number of "
