@@ -156,11 +156,11 @@ def _dataclass_dict(obj: Any) -> dict[str, Any]:
 def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None:
     from rich.console import Console
     from rich.markup import escape
-    from rich.table import Table
+
+    from pendulum_lqg.cli.lti import metric_table, success_line
 
     con = Console(highlight=False)
     sc = config["scenario"]
-    lo, hi = s["success_ci95"]
     con.print(escape(f"{name} — {s['episodes']} episodes, seed {config['seed']}, "
                      f"T = {sc['control_period']} s, {sc['duration']} s, noise scale "
                      f"{sc['noise']['scale']}, x0 = {list(sc['x0'])}"))
@@ -169,12 +169,8 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None
     if extras:
         con.print(escape("sensing and actuation: " + ", ".join(f"{k} = {v}"
                                                                  for k, v in extras.items())))
-    con.print(f"success: {s['successes']}/{s['episodes']} = {s['success_rate']:.1%} "
-              f"(95 % Wilson CI {lo:.1%} – {hi:.1%})"
-              + escape(f"; failures: {s['failures']}" if s["failures"] else ""))
-    t = Table()
-    t.add_column("metric")
-    t.add_column("mean ± s.e.")
+    con.print(success_line(s))
+    t = metric_table()
     rows = [("cost", "J = ∫xᵀQx + uᵀRu dt (successes)", 1.0), ("rms_theta", "RMS θ [rad]", 1.0),
             ("max_abs_theta", "max |θ| [rad]", 1.0), ("rms_p", "RMS p [m]", 1.0),
             ("max_abs_p", "max |p| [m]", 1.0), ("rms_u", "RMS u [N]", 1.0),

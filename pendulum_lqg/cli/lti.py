@@ -110,23 +110,17 @@ def _print_summary(config: dict[str, Any], scenario: Any, s: dict[str, Any],
                    fields: tuple[str, ...]) -> None:
     from rich.console import Console
     from rich.markup import escape
-    from rich.table import Table
 
     from pendulum_lqg.core.metrics import summary_metrics
 
     con = Console(highlight=False)
-    lo, hi = s["success_ci95"]
     con.print(escape(f"{config['policy']} on the LTI plant {config['plant']} ({config['lti']}) — "
                      f"{s['episodes']} episodes, seed {config['seed']}, "
                      f"T = {scenario.control_period:g} s, {scenario.duration:g} s, noise scale "
                      f"{scenario.noise.scale:g}, x0 = {config['x0']}, force limit "
                      f"{config['force_limit']}"))
-    con.print(f"success: {s['successes']}/{s['episodes']} = {s['success_rate']:.1%} "
-              f"(95 % Wilson CI {lo:.1%} – {hi:.1%})"
-              + escape(f"; failures: {s['failures']}" if s["failures"] else ""))
-    t = Table()
-    t.add_column("metric")
-    t.add_column("mean ± s.e.")
+    con.print(success_line(s))
+    t = metric_table()
     for key in summary_metrics(fields):
         m, se = s[key]["mean"], s[key]["se"]
         cell = "–" if m != m else (f"{m:.4g}" if se != se else f"{m:.4g} ± {se:.2g}")
@@ -148,3 +142,25 @@ def _label(key: str) -> str:
         if key.startswith(prefix):
             return text + key[len(prefix):]
     return key
+
+
+def success_line(summary: dict[str, Any]) -> str:
+    """The run summary's first line: successes, the rate with its Wilson interval, the failures
+    (rich markup, escaped where it holds data). Shared by ``run`` on any plant."""
+    from rich.markup import escape
+
+    s = summary
+    lo, hi = s["success_ci95"]
+    return (f"success: {s['successes']}/{s['episodes']} = {s['success_rate']:.1%} "
+            f"(95 % Wilson CI {lo:.1%} – {hi:.1%})"
+            + escape(f"; failures: {s['failures']}" if s["failures"] else ""))
+
+
+def metric_table() -> Any:
+    """The empty two-column table of a run's metrics (``metric``, ``mean ± s.e.``)."""
+    from rich.table import Table
+
+    t = Table()
+    t.add_column("metric")
+    t.add_column("mean ± s.e.")
+    return t
