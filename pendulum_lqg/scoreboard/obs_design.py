@@ -164,11 +164,8 @@ def history_vec_env(venv: Any, design: ObservationDesign, *, base: type | None =
     """``venv`` (an SB3 ``VecEnv``) seen through ``design``'s stacks. ``base``: the
     ``VecEnvWrapper`` class to mix in (default: stable-baselines3's, the ``rl`` extra)."""
     if base is None:
-        try:
-            from stable_baselines3.common.vec_env import VecEnvWrapper
-        except ImportError as exc:
-            raise ConfigError("history_vec_env needs stable-baselines3 (install the rl extra: "
-                              "pip install 'pendulum_lqg-…whl[rl]')") from exc
-        base = VecEnvWrapper
+        from pendulum_lqg.scoreboard.sb3_vec import sb3_vec_env_class
+
+        base = sb3_vec_env_class("VecEnvWrapper", "history_vec_env")
     cls = type("HistoryVecEnv", (HistoryVecEnvLogic, base), {"__module__": __name__})
     return cls(venv, design)

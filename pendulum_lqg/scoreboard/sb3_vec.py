@@ -158,18 +158,26 @@ class NativeVecEnvLogic:
         return [False for _ in self._rows(indices)]
 
 
+
+def sb3_vec_env_class(name: str, who: str) -> type:
+    """stable-baselines3's ``stable_baselines3.common.vec_env.NAME`` (``VecEnv``,
+    ``VecEnvWrapper``), imported when first needed; without the ``rl`` extra one line naming
+    ``who`` needs it."""
+    try:
+        from stable_baselines3.common import vec_env
+    except ImportError as exc:
+        raise ConfigError(f"{who} needs stable-baselines3 (install the rl extra: "
+                          "pip install 'pendulum_lqg-…whl[rl]')") from exc
+    cls: type = getattr(vec_env, name)
+    return cls
+
+
 def native_vec_env(num_envs: int, *, base: type | None = None, seed: int | None = None,
                    **env_kwargs: Any) -> Any:
     """An SB3 ``VecEnv`` over the native vector env (see the module docstring); ``seed`` is
     passed to its ``seed()`` (used at the first ``reset()``). ``base``: the ``VecEnv`` class to
     mix in (default: stable-baselines3's, which needs the ``rl`` extra)."""
-    if base is None:
-        try:
-            from stable_baselines3.common.vec_env import VecEnv
-        except ImportError as exc:
-            raise ConfigError("native_vec_env needs stable-baselines3 (install the rl extra: "
-                              "pip install 'pendulum_lqg-…whl[rl]')") from exc
-        base = VecEnv
+    base = sb3_vec_env_class("VecEnv", "native_vec_env") if base is None else base
     cls = type("NativeSB3VecEnv", (NativeVecEnvLogic, base), {"__module__": __name__})
     env = cls(num_envs, **env_kwargs)
     if seed is not None:
