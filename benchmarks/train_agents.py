@@ -135,13 +135,14 @@ def eval_suite(suite: Any) -> Any:
 
 
 def train(method: str, out: Path, *, seed: int, steps: int | None = None,
-          eval_every: int = 50_000) -> Path:
-    """Train run ``seed`` of ``method``; write its model, record and learning curve to ``out``."""
+          eval_every: int = 50_000, m: Method | None = None) -> Path:
+    """Train run ``seed`` of ``method`` (or of ``m``, a variant of it that the pilot tries, under
+    the name ``method``); write its model, record and learning curve to ``out``."""
     import torch
 
     from pendulum_lqg.scoreboard import episodes as ep
 
-    m = METHODS[method]
+    m = m or METHODS[method]
     steps = steps or m.steps
     torch.set_num_threads(1)
     model, venv, suite = build(m, seed)
