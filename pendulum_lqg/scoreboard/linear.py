@@ -225,19 +225,20 @@ def linear_agent(path_text: str) -> LinearFactory:
     return LinearFactory(path_text, linear_controller(path_text, where_text="agent"))
 
 
-def linear_rows(suite: Any, factory: LinearFactory, *, nthread: int | None = None,
+def linear_rows(suite: Any, doc: dict[str, Any], *, name: str, nthread: int | None = None,
                 ) -> list[dict[str, Any]]:
-    """The rows of the controller of ``factory`` on ``suite``: every episode through the core's
-    batch, as a built-in policy's (:func:`~pendulum_lqg.scoreboard.episodes.policy_rows`)."""
+    """The rows of the controller document ``doc`` (named ``name`` in errors) on ``suite``: every
+    episode through the core's batch, as a built-in policy's
+    (:func:`~pendulum_lqg.scoreboard.episodes.policy_rows`)."""
     from pendulum_lqg.core.rules import limits
     from pendulum_lqg.core.runner import run_episodes
 
     if suite.observes_state:
-        raise NotApplicable(f"agent {factory.name!r} takes y = [p, θ]; suite {suite.name!r} "
+        raise NotApplicable(f"agent {name!r} takes y = [p, θ]; suite {suite.name!r} "
                             "gives the true state")
     simulated, nominal = suite.plants()
     scenario = suite.config.scenario
-    policy = linear_policy(factory.doc, limits(nominal, scenario)[2])
+    policy = linear_policy(doc, limits(nominal, scenario)[2])
     res = run_episodes(simulated, scenario, policy, seed=suite.seed,
                        episodes=range(suite.episodes), nthread=nthread)
     return [{"episode": r["episode"], "seed": r["seed"], "success": r["success"],

@@ -218,7 +218,7 @@ def _agent_rows_of(agent: str, factory: Any, normalized: bool, nthread: int | No
 
     def rows_of(s: Suite) -> list[dict[str, Any]]:
         if isinstance(factory, LinearFactory):
-            return linear_rows(s, factory, nthread=nthread)
+            return linear_rows(s, factory.doc, name=factory.name, nthread=nthread)
         if isinstance(factory, SB3Factory):
             from pendulum_lqg.scoreboard.sb3_batch import batched_rows
 
