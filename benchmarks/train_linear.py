@@ -27,13 +27,14 @@ same episode (common random numbers: the ± difference sees the same noise); the
 of the env's reward (v0, the deep-RL baselines' reward). The ``b`` best directions (by
 ``max(r₊, r₋)``) update ``M ← M + α/(b σ_R) Σ (r₊ − r₋) δ`` (``σ_R`` the std of their ``2b``
 returns), and ``μ, σ`` are the running mean and std of every history the rollouts saw (V2).
-Settings ``N = 16, b = 8``; ``α, ν, K`` from the pilot below; budget 1 000 000 env steps, a
-curve point every 50 000.
+Settings ``N = 16, b = 8``; ``α, ν, K`` below; budget 1 000 000 env steps, a curve point every
+50 000.
 
-*Pilot* (pilot seeds 100 and 101 only, 300 000 steps each): ``α ∈ {0.02, 0.05}``,
-``ν ∈ {0.02, 0.05}``, ``K ∈ {4, 16}`` (8 settings); the selection rule is the highest mean
-over the two seeds of the last curve point's failure-aware score, ties broken by success rate.
-``--alpha``, ``--nu``, ``--frames`` override the chosen settings (the pilot's runs).
+*Pilot* (planned, not yet run: pilot seeds 100 and 101 only, 300 000 steps each):
+``α ∈ {0.02, 0.05}``, ``ν ∈ {0.02, 0.05}``, ``K ∈ {4, 16}`` (8 settings); the selection rule is
+the highest mean over the two seeds of the last curve point's failure-aware score, ties broken by
+success rate. Until it has run, the settings are the unpiloted defaults ``α = 0.02, ν = 0.05,
+K = 16`` (:class:`ARSSettings`). ``--alpha``, ``--nu``, ``--frames`` set a pilot run's.
 
 **sysid-lqg** — nominal identification (:mod:`pendulum_lqg.design.sysid`): open-loop episodes of
 ``H = 30`` periods (the pole falls from θ₀ in about half a second: no stabilising controller is
