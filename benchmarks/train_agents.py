@@ -221,6 +221,13 @@ def _versions() -> dict[str, str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    import sys
+
+    args_in = sys.argv[1:] if argv is None else argv
+    if args_in and args_in[0] in ("ars-history", "sysid-lqg"):  # torch-free: train_linear.py
+        from train_linear import main as linear_main
+
+        return linear_main(args_in)
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("method", nargs="?", choices=sorted(METHODS))
     ap.add_argument("--seed", type=int, default=0, help="the run's training seed (default 0)")

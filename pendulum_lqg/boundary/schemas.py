@@ -1,5 +1,6 @@
 """One schema per external JSON format: score files (``board``), stable-baselines3 training records
-(``--agent sb3:PATH.zip``) and the check records of a results folder's work units. Suite files are checked by
+(``--agent sb3:PATH.zip``), linear controller files (``--agent linear:FILE.json``) and the check
+records of a results folder's work units. Suite files are checked by
 :func:`pendulum_lqg.scoreboard.suites.parse_suite` and experiment files by
 :func:`pendulum_lqg.bench.experiments.parse_spec`, with the same validators
 (:mod:`pendulum_lqg.boundary.fields`) and the same readers (:mod:`pendulum_lqg.boundary`).
@@ -134,6 +135,65 @@ def training_record(path: str | os.PathLike[str], *, where_text: str) -> dict[st
             "env": dict(env), "budget": data.get("budget")}
 
 
+#: The ``format`` and ``version`` of a linear controller file (``--agent linear:FILE.json``).
+LINEAR_FORMAT, LINEAR_VERSION = "pendulum-lqg linear controller", 1
+#: Ceiling of a linear controller's state dimension (a matrix of that many rows is kept per row).
+MAX_LINEAR_STATES = 1_000
+#: Inputs of a linear controller per control period: ``z = [p, θ, u_prev / action_scale]``.
+LINEAR_INPUTS = 3
+
+
+def _matrix(rows: int | None, cols: int | None) -> Any:
+    """A list of ``rows`` lists of ``cols`` finite numbers (``None``: any count)."""
+    return list_of(list_of(number(), cols), rows)
+
+
+def _history_form(where: Where, data: Any) -> dict[str, Any]:
+    data = where.check(data, table)
+    frames = where.get(data, "frames", integer(1))
+    if frames > MAX_FRAME_STACK:
+        raise where.error(f"at most {MAX_FRAME_STACK:,} (frames the controller keeps), got "
+                          f"{frames:,}", "frames")
+    size = LINEAR_INPUTS * frames
+    return {"frames": frames, "weights": where.get(data, "weights", list_of(number(), size)),
+            "bias": where.get(data, "bias", number(), default=0.0),
+            "mean": where.get(data, "mean", list_of(number(), size)),
+            "std": where.get(data, "std", list_of(number(low=1e-12), size))}
+
+
+def _state_space_form(where: Where, data: Any) -> dict[str, Any]:
+    data = where.check(data, table)
+    A = where.get(data, "A", _matrix(None, None))
+    n = len(A)
+    if not 1 <= n <= MAX_LINEAR_STATES:
+        raise where.error(f"expected 1 … {MAX_LINEAR_STATES:,} states, got {n}", "A")
+    return {"A": where.get(data, "A", _matrix(n, n)),
+            "B": where.get(data, "B", _matrix(n, LINEAR_INPUTS)),
+            "C": where.get(data, "C", _matrix(1, n)),
+            "D": where.get(data, "D", _matrix(1, LINEAR_INPUTS))}
+
+
+def linear_controller(path: str | os.PathLike[str], *, where_text: str) -> dict[str, Any]:
+    """A linear controller file (``--agent linear:FILE.json``; the format:
+    :mod:`pendulum_lqg.scoreboard.linear`), checked; errors are one line naming the file and
+    key."""
+    data = read_json(path, where=where_text)
+    where = Where(f"{where_text}: {path}")
+    data = where.check(data, table)
+    where.get(data, "format", exactly(LINEAR_FORMAT))
+    where.get(data, "version", exactly(LINEAR_VERSION))
+    form = where.get(data, "form", one_of(("history", "state_space")))
+    parse = _history_form if form == "history" else _state_space_form
+    env = where.get(data, "env", table, default={})
+    where.at("env").get(env, "observation_mode", one_of(("measurement",)),
+                        default="measurement")
+    return {"form": form, form: parse(where.at(form), where.get(data, form, table)),
+            "action_scale": where.get(data, "action_scale", number(low=1e-12)),
+            "method": where.get(data, "method", text, default=None),
+            "seed": where.get(data, "seed", integer(0), default=None),
+            "env": dict(env), "training": data.get("training")}
+
+
 def unit_record(path: str | os.PathLike[str]) -> dict[str, Any]:
     """A work unit's check record (``units/KEY.json`` of a results folder; its fields:
     :func:`pendulum_lqg.bench.results.ResultsDir.write_unit`); errors name the file and key."""
@@ -149,5 +209,6 @@ def unit_record(path: str | os.PathLike[str]) -> dict[str, Any]:
     return out
 
 
-__all__ = ["ALGORITHMS", "MAX_FRAME_STACK", "SCORE_VERSION", "score_file", "score_suite",
+__all__ = ["ALGORITHMS", "LINEAR_FORMAT", "LINEAR_INPUTS", "LINEAR_VERSION", "MAX_FRAME_STACK",
+           "MAX_LINEAR_STATES", "SCORE_VERSION", "linear_controller", "score_file", "score_suite",
            "training_record", "unit_record"]

@@ -23,7 +23,8 @@ def add_parsers(sub: Any, positive_int: Any) -> None:
     p.add_argument("--agent", default=None, metavar="REF",
                    help="a Gymnasium agent instead of POLICY (default: none): MODULE:ATTR or "
                         "path.py:ATTR naming a factory f(env) -> object with reset() and act(obs); "
-                        "or sb3:PATH.zip (a stable-baselines3 model, the rl extra)")
+                        "or sb3:PATH.zip (a stable-baselines3 model, the rl extra), or "
+                        "linear:FILE.json (a linear controller of a y/u history)")
     p.add_argument("--suite", action="append", default=None, metavar="NAME",
                    help="suite name or file (repeatable), or 'all' (the default): "
                         "full-state, lecture, mismatch, delayed, lossy, noisy, hard")

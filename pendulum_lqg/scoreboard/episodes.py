@@ -9,8 +9,9 @@ simulator, with the same noise streams, saturation, failure rule and cost.
 
 A **Gymnasium agent** is what a factory ``f(env)`` returns: an object with ``reset()`` (a new
 episode starts) and ``act(observation) -> action``. References: ``MODULE:ATTR`` or
-``path/to/file.py:ATTR`` (loaded like a plug-in), or ``sb3:PATH.zip`` (a stable-baselines3 model:
-:mod:`pendulum_lqg.scoreboard.sb3`).
+``path/to/file.py:ATTR`` (loaded like a plug-in), ``sb3:PATH.zip`` (a stable-baselines3 model:
+:mod:`pendulum_lqg.scoreboard.sb3`) or ``linear:FILE.json`` (a linear controller of a y/u history:
+:mod:`pendulum_lqg.scoreboard.linear`).
 """
 
 from __future__ import annotations
@@ -159,17 +160,22 @@ def plugin_agent(ref: str, *, base_dir: Path | None = None) -> AgentFactory:
 
 
 def load_agent(ref: str, *, base_dir: Path | None = None) -> AgentFactory:
-    """The agent factory a reference names: ``sb3:PATH.zip``, ``MODULE:ATTR`` or ``file.py:ATTR``."""
+    """The agent factory a reference names: ``sb3:PATH.zip``, ``linear:FILE.json``, ``MODULE:ATTR``
+    or ``file.py:ATTR``."""
     if not isinstance(ref, str) or not ref:
-        raise ConfigError(f"agent: expected MODULE:ATTR, path/to/file.py:ATTR or sb3:PATH.zip, "
-                          f"got {ref!r}")
+        raise ConfigError(f"agent: expected MODULE:ATTR, path/to/file.py:ATTR, sb3:PATH.zip or "
+                          f"linear:FILE.json, got {ref!r}")
     if ref.startswith("sb3:"):
         from pendulum_lqg.scoreboard.sb3 import sb3_agent
 
         return sb3_agent(ref.removeprefix("sb3:"))
+    if ref.startswith("linear:"):
+        from pendulum_lqg.scoreboard.linear import linear_agent
+
+        return linear_agent(ref.removeprefix("linear:"))
     if not is_plugin_ref(ref):
-        raise ConfigError(f"agent: expected MODULE:ATTR, path/to/file.py:ATTR or sb3:PATH.zip, "
-                          f"got {ref!r}")
+        raise ConfigError(f"agent: expected MODULE:ATTR, path/to/file.py:ATTR, sb3:PATH.zip or "
+                          f"linear:FILE.json, got {ref!r}")
     return load_factory(ref, base_dir=base_dir)       # type: ignore[return-value]
 
 

@@ -112,6 +112,11 @@ class ObservationHistory:
         self.stack[rows], self.held[rows] = stack, held
         return out
 
+    def select(self, rows: np.ndarray) -> None:
+        """Keep only ``rows`` (ended episodes leave the batch: the policy protocol's ``select``)."""
+        self.stack, self.held = self.stack[rows], self.held[rows]
+        self.n = self.stack.shape[0]
+
     def push(self, rows: np.ndarray, obs: np.ndarray, actions: np.ndarray | None) -> np.ndarray:
         """Append the frame of ``obs`` (and ``actions``) to ``rows``; their stacks (a copy)."""
         frame = self._frame(rows, obs, actions)

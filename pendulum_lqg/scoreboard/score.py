@@ -176,7 +176,7 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
             lambda: bool(getattr(factory, "normalize_action", False)))
         name, kind = agent, "agent"
         run, extra_versions = _run_of(factory)
-        rows_of = _agent_rows_of(agent, factory, normalized)
+        rows_of = _agent_rows_of(agent, factory, normalized, nthread)
     else:
         assert policy is not None
         if not policy:
@@ -195,22 +195,30 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
 
 
 def _run_of(factory: Any) -> tuple[dict[str, Any] | None, dict[str, str]]:
-    """An sb3 model's run (method, seed, the model's sha256) and its libraries' versions."""
+    """An sb3 model's or a linear controller's run (method, seed, the file's sha256), and the
+    libraries' versions an sb3 model depends on."""
+    from pendulum_lqg.scoreboard.linear import LinearFactory
     from pendulum_lqg.scoreboard.sb3 import SB3Factory
 
     if isinstance(factory, SB3Factory):
         return factory.run, factory.versions
+    if isinstance(factory, LinearFactory):
+        return factory.run, {}
     return None, {}
 
 
-def _agent_rows_of(agent: str, factory: Any, normalized: bool,
+def _agent_rows_of(agent: str, factory: Any, normalized: bool, nthread: int | None,
                    ) -> Callable[[Suite], list[dict[str, Any]]]:
     """The rows of an agent on a suite: an sb3 model batched (all episodes at once, one predict
-    per control period), any other agent one episode after another."""
+    per control period), a linear controller through the core's batch, any other agent one
+    episode after another."""
     from pendulum_lqg.scoreboard import episodes as ep
+    from pendulum_lqg.scoreboard.linear import LinearFactory, linear_rows
     from pendulum_lqg.scoreboard.sb3 import SB3Factory
 
     def rows_of(s: Suite) -> list[dict[str, Any]]:
+        if isinstance(factory, LinearFactory):
+            return linear_rows(s, factory.doc, name=factory.name, nthread=nthread)
         if isinstance(factory, SB3Factory):
             from pendulum_lqg.scoreboard.sb3_batch import batched_rows
 
