@@ -32,6 +32,11 @@ def add_parsers(sub: Any, positive_int: Any) -> None:
                         "score whose fingerprint differs from the full one)")
     p.add_argument("--normalize-action", action="store_true",
                    help="Gymnasium agents act in [-1, 1] (the env's normalize_action)")
+    p.add_argument("--noise-scale", type=_noise_scale, default=None, metavar="X",
+                   help="play every suite with its env's noise_scale set to X (both noises' std "
+                        "times X; the designs keep the nominal noise): the noise ladder; the "
+                        "suites' fingerprints then differ from the shipped ones unless X is their "
+                        "own (default: each suite's own noise)")
     p.add_argument("--nthread", type=positive_int, default=None,
                    help="physics threads of the batch path (default: the CPU cores, at most 8)")
     p.add_argument("--json", action="store_true", help="print the score file (JSON) instead")
@@ -61,6 +66,19 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _noise_scale(text: str) -> float:
+    """argparse type: a finite number ≥ 0."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number ≥ 0, got {text!r}")
+    return value
+
+
 def add_call_timeout(p: argparse.ArgumentParser) -> None:
     """``--call-timeout S``: the watchdog of user code (:mod:`pendulum_lqg.watchdog`)."""
     p.add_argument("--call-timeout", type=_seconds, default=None, metavar="S",
@@ -79,7 +97,8 @@ def cmd_score(args: argparse.Namespace) -> int:
     out = None if args.out is None else output_file("--out", args.out, what="score (JSON)")
     wanted = args.suite or ["all"]
     names = suite_names() if "all" in wanted else wanted
-    suites = [load_suite(n).with_episodes(args.episodes) for n in names]
+    suites = [load_suite(n).with_episodes(args.episodes).with_noise_scale(args.noise_scale)
+              for n in names]
     with call_timeout(args.call_timeout), Progress("score", len(suites), unit="suites") as bar:
         doc = score_entry(suites, policy=args.policy, agent=args.agent,
                           normalize_action=args.normalize_action, nthread=args.nthread,
