@@ -97,12 +97,11 @@ def cmd_score(args: argparse.Namespace) -> int:
     out = None if args.out is None else output_file("--out", args.out, what="score (JSON)")
     wanted = args.suite or ["all"]
     names = suite_names() if "all" in wanted else wanted
-    suites = [load_suite(n).with_episodes(args.episodes).with_noise_scale(args.noise_scale)
-              for n in names]
+    suites = [load_suite(n).with_episodes(args.episodes) for n in names]
     with call_timeout(args.call_timeout), Progress("score", len(suites), unit="suites") as bar:
         doc = score_entry(suites, policy=args.policy, agent=args.agent,
                           normalize_action=args.normalize_action, nthread=args.nthread,
-                          base_dir=Path.cwd(),
+                          base_dir=Path.cwd(), noise_scale=args.noise_scale,
                           on_suite=lambda name: bar.advance(description=f"scored {name}"))
     text = json.dumps(doc, indent=1, allow_nan=False)
     if out is not None:
