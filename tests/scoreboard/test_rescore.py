@@ -139,5 +139,7 @@ def test_the_noise_ladder_plays_the_suites_at_the_scale_it_names(tmp_path, capsy
     assert len({round(r["cost"], 9) for r in rows}) == 1
     assert rows[0]["cost"] < min(r["cost"] for r in policy_rows(lecture, "dlqr+kalman"))
     capsys.readouterr()
-    assert main(["score", "dlqr+kalman", "--suite", "lecture", "--noise-scale", "-1"]) == 2
+    with pytest.raises(SystemExit) as exc:          # argparse refuses it: usage, one line, 2
+        main(["score", "dlqr+kalman", "--suite", "lecture", "--noise-scale", "-1"])
+    assert exc.value.code == 2
     assert "--noise-scale: expected a finite number ≥ 0, got '-1'" in capsys.readouterr().err
