@@ -5,11 +5,14 @@ wheel first, ``pip install torch --index-url https://download.pytorch.org/whl/cp
 
     python benchmarks/train_agents.py ppo-history --seed 3                    # one run
     python benchmarks/train_agents.py ppo-history --seed 3 --steps 4000 --eval-every 2000   # a smoke run
+    python benchmarks/train_agents.py ppo-history --seed 3 --noise-scale 0.25 # the noise ladder
     python benchmarks/train_agents.py --list                                  # the methods
 
 One run writes, in ``--out`` (default ``experiments/agents/models``):
 
-* ``METHOD-seedS.zip`` — the model;
+* ``METHOD-seedS.zip`` — the model (``METHOD-noiseX-seedS.zip`` with ``--noise-scale X``: the
+  method's suite with its env's ``noise_scale`` set to ``X``, the noise ladder; its record's
+  ``method`` is ``METHOD-noiseX``, so ``board`` never pools it with the method's own runs);
 * ``METHOD-seedS.json`` — its training record (the schema:
   :func:`pendulum_lqg.boundary.schemas.training_record`): ``method``, ``seed``, the algorithm, the
   observation design (``frame_stack``, ``past_actions``, the frozen ``obs_norm``), the env, the
@@ -59,6 +62,13 @@ class Method:
     envs: int
     kwargs: dict[str, Any] = field(default_factory=dict)
     what: str = ""
+    #: show the reference Kalman filter's x̂ instead of y (:mod:`pendulum_lqg.scoreboard.obs_design`)
+    estimator: str | None = None
+
+    def design(self) -> Any:
+        from pendulum_lqg.scoreboard.obs_design import ObservationDesign
+
+        return ObservationDesign(self.frame_stack, self.past_actions, self.estimator)
 
 
 # K = 32, log_std_init = −1 and γ = 0.998: the pilot's choice (benchmarks/pilot_agents.py)
@@ -78,6 +88,9 @@ METHODS: dict[str, Method] = {
                           {"learning_starts": 5_000, "train_freq": 1, "gradient_steps": 2,
                            "gamma": 0.995, "policy_kwargs": {"net_arch": [64, 64]}},
                           "SAC over the last 32 (y, previous action) pairs"),
+    "ppo-kalman": Method("PPO", "lecture", 1, False, 1_000_000, 16, _PPO,
+                         "PPO-MLP on the reference Kalman filter's x̂ (estimation given, control "
+                         "learnt)", estimator="kalman"),
     "ppo-full-state": Method("PPO", "full-state", 1, False, 400_000, 16, _PPO,
                              "PPO-MLP on the true state x (the control-only row)"),
     "ppo-lecture": Method("PPO", "lecture", 8, False, 400_000, 8,
@@ -90,20 +103,32 @@ def run_name(method: str, seed: int) -> str:
     return f"{method}-seed{seed}"
 
 
-def make_training_env(m: Method, seed: int) -> tuple[Any, Any]:
+def method_name(method: str, noise_scale: float | None) -> str:
+    """The run's method: ``METHOD``, or ``METHOD-noiseX`` on the noise ladder."""
+    return method if noise_scale is None else f"{method}-noise{noise_scale:g}"
+
+
+def training_suite(m: Method, noise_scale: float | None = None) -> Any:
+    """The suite ``m`` trains on, its env's ``noise_scale`` set to ``noise_scale`` if given."""
+    from pendulum_lqg.scoreboard.suites import load_suite
+
+    return load_suite(m.suite).with_noise_scale(noise_scale)
+
+
+def make_training_env(m: Method, seed: int, noise_scale: float | None = None,
+                      ) -> tuple[Any, Any]:
     """``VecNormalize(design(native vector env))`` of method ``m``, and the suite (seeded by
     :func:`build`)."""
     from stable_baselines3.common.vec_env import VecNormalize
 
     from pendulum_lqg.scoreboard.obs_design import ObservationDesign, history_vec_env
     from pendulum_lqg.scoreboard.sb3_vec import native_vec_env
-    from pendulum_lqg.scoreboard.suites import load_suite
 
-    suite = load_suite(m.suite)
+    suite = training_suite(m, noise_scale)
     venv = native_vec_env(m.envs, nthread=1, normalize_action=True, **suite.env)
-    design = ObservationDesign(m.frame_stack, m.past_actions)
+    design = m.design()
     if design != ObservationDesign():
-        venv = history_vec_env(venv, design)
+        venv = history_vec_env(venv, design, normalize_action=True)
     return VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0), suite
 
 
@@ -123,8 +148,7 @@ def evaluate(model: Any, m: Method, norm: Any, suite: Any, reference: list[dict[
 
     # the scorer's batched path, with the statistics VecNormalize holds now (the record's later)
     run = SimpleNamespace(path_text=f"(training {m.algo})", model=model, normalize_action=True,
-                          env=suite.env, meta={"frame_stack": m.frame_stack,
-                                               "past_actions": m.past_actions,
+                          env=suite.env, meta={**m.design().record(),
                                                "obs_norm": obs_norm_of(norm)})
     rows = batched_rows(eval_suite(suite), run)
     fig = failure_aware_figures(rows, reference)
@@ -138,17 +162,20 @@ def eval_suite(suite: Any) -> Any:
 
 
 def train(method: str, out: Path, *, seed: int, steps: int | None = None,
-          eval_every: int = 50_000, m: Method | None = None) -> Path:
+          eval_every: int = 50_000, m: Method | None = None,
+          noise_scale: float | None = None) -> Path:
     """Train run ``seed`` of ``method`` (or of ``m``, a variant of it that the pilot tries, under
-    the name ``method``); write its model, record and learning curve to ``out``."""
+    the name ``method``), on its suite's noise or at ``noise_scale``; write its model, record and
+    learning curve to ``out``."""
     import torch
 
     from pendulum_lqg.scoreboard import episodes as ep
 
     m = m or METHODS[method]
     steps = steps or m.steps
+    method = method_name(method, noise_scale)
     torch.set_num_threads(1)
-    model, venv, suite = build(m, seed)
+    model, venv, suite = build(m, seed, noise_scale)
     reference = ep.policy_rows(eval_suite(suite), suite.reference, nthread=1)
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{run_name(method, seed)}.zip"
@@ -169,11 +196,11 @@ def train(method: str, out: Path, *, seed: int, steps: int | None = None,
     return path
 
 
-def build(m: Method, seed: int) -> tuple[Any, Any, Any]:
+def build(m: Method, seed: int, noise_scale: float | None = None) -> tuple[Any, Any, Any]:
     """The model, its training env and the suite of run ``seed`` of ``m``, the env seeded for
     its first reset (SB3 seeds the env with the model's seed when it builds the model: seeded
     again after that, sub-env i starts from TRAIN_SEED_BASE + 1000·seed + i)."""
-    venv, suite = make_training_env(m, seed)
+    venv, suite = make_training_env(m, seed, noise_scale)
     model = _model(m, venv, seed)
     venv.seed(TRAIN_SEED_BASE + 1000 * seed)
     return model, venv, suite
@@ -202,7 +229,7 @@ def _record(method: str, m: Method, seed: int, steps: int, venv: Any, suite: Any
     from pendulum_lqg.scoreboard.sb3 import rl_versions
 
     return {"method": method, "seed": seed, "algo": m.algo, "suite": suite.name,
-            "frame_stack": m.frame_stack, "past_actions": m.past_actions,
+            **m.design().record(),
             "normalize_action": True, "obs_norm": obs_norm_of(venv),
             "wrappers": "VecNormalize(history(native_vec_env))", "env_id": pendulum_lqg.ENV_ID,
             "env": suite.env, "reward": "v0 (exp(-c / (s·T)))",
@@ -233,6 +260,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="the run's training seed (default 0)")
     ap.add_argument("--steps", type=int, default=None, help="env steps (default: the method's)")
     ap.add_argument("--eval-every", type=int, default=50_000, help="env steps between curve points")
+    ap.add_argument("--noise-scale", type=float, default=None, metavar="X",
+                    help="train at the suite's env with noise_scale X (the noise ladder: 0, 0.25, "
+                         "0.5, 1); writes METHOD-noiseX-seedS (default: the suite's own noise)")
     ap.add_argument("--out", type=Path, default=Path("experiments/agents/models"))
     ap.add_argument("--list", action="store_true", help="list the methods and exit")
     args = ap.parse_args(argv)
@@ -245,10 +275,12 @@ def main(argv: list[str] | None = None) -> int:
         if value is not None and value < (0 if name == "seed" else 1):
             ap.error(f"--{name.replace('_', '-')}: expected a "
                      f"{'non-negative' if name == 'seed' else 'positive'} integer, got {value}")
+    if args.noise_scale is not None and not 0 <= args.noise_scale < float("inf"):
+        ap.error(f"--noise-scale: expected a finite number ≥ 0, got {args.noise_scale}")
     path = train(args.method, args.out, seed=args.seed, steps=args.steps,
-                 eval_every=args.eval_every)
+                 eval_every=args.eval_every, noise_scale=args.noise_scale)
     print(f"wrote {path}, {path.with_suffix('.json').name} and "
-          f"{run_name(args.method, args.seed)}-curve.csv", flush=True)
+          f"{path.stem}-curve.csv", flush=True)
     return 0
 
 

@@ -37,6 +37,9 @@ ALGORITHMS = {"PPO": "stable_baselines3", "SAC": "stable_baselines3", "TD3": "st
               "RecurrentPPO": "sb3_contrib", "TQC": "sb3_contrib"}
 #: Ceiling of a training record's ``frame_stack`` (the agent keeps that many observations).
 MAX_FRAME_STACK = 10_000
+#: The estimators an observation design may show instead of ``y``
+#: (:mod:`pendulum_lqg.scoreboard.obs_design`).
+ESTIMATORS = ("kalman",)
 
 _RATE = number(low=0.0, high=1.0)
 _ROW_KEYS = ("episode", "success", "cost")
@@ -130,6 +133,7 @@ def training_record(path: str | os.PathLike[str], *, where_text: str) -> dict[st
             "seed": where.get(data, "seed", integer(0), default=None),
             "frame_stack": frames,
             "past_actions": where.get(data, "past_actions", boolean, default=False),
+            "estimator": where.get(data, "estimator", one_of(ESTIMATORS), default=None),
             "obs_norm": _obs_norm(where.at("obs_norm"), data.get("obs_norm")),
             "normalize_action": where.get(data, "normalize_action", boolean, default=False),
             "env": dict(env), "budget": data.get("budget")}
@@ -209,6 +213,7 @@ def unit_record(path: str | os.PathLike[str]) -> dict[str, Any]:
     return out
 
 
-__all__ = ["ALGORITHMS", "LINEAR_FORMAT", "LINEAR_INPUTS", "LINEAR_VERSION", "MAX_FRAME_STACK",
-           "MAX_LINEAR_STATES", "SCORE_VERSION", "linear_controller", "score_file", "score_suite",
+__all__ = ["ALGORITHMS", "ESTIMATORS", "LINEAR_FORMAT", "LINEAR_INPUTS", "LINEAR_VERSION",
+           "MAX_FRAME_STACK", "MAX_LINEAR_STATES", "SCORE_VERSION", "linear_controller", "score_file",
+           "score_suite",
            "training_record", "unit_record"]

@@ -33,6 +33,11 @@ def add_parsers(sub: Any, positive_int: Any) -> None:
                         "score whose fingerprint differs from the full one)")
     p.add_argument("--normalize-action", action="store_true",
                    help="Gymnasium agents act in [-1, 1] (the env's normalize_action)")
+    p.add_argument("--noise-scale", type=_noise_scale, default=None, metavar="X",
+                   help="play every suite with its env's noise_scale set to X (both noises' std "
+                        "times X; the designs keep the nominal noise): the noise ladder; the "
+                        "suites' fingerprints then differ from the shipped ones unless X is their "
+                        "own (default: each suite's own noise)")
     p.add_argument("--nthread", type=positive_int, default=None,
                    help="physics threads of the batch path (default: the CPU cores, at most 8)")
     p.add_argument("--json", action="store_true", help="print the score file (JSON) instead")
@@ -62,6 +67,19 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _noise_scale(text: str) -> float:
+    """argparse type: a finite number ≥ 0."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number ≥ 0, got {text!r}")
+    return value
+
+
 def add_call_timeout(p: argparse.ArgumentParser) -> None:
     """``--call-timeout S``: the watchdog of user code (:mod:`pendulum_lqg.watchdog`)."""
     p.add_argument("--call-timeout", type=_seconds, default=None, metavar="S",
@@ -84,7 +102,7 @@ def cmd_score(args: argparse.Namespace) -> int:
     with call_timeout(args.call_timeout), Progress("score", len(suites), unit="suites") as bar:
         doc = score_entry(suites, policy=args.policy, agent=args.agent,
                           normalize_action=args.normalize_action, nthread=args.nthread,
-                          base_dir=Path.cwd(),
+                          base_dir=Path.cwd(), noise_scale=args.noise_scale,
                           on_suite=lambda name: bar.advance(description=f"scored {name}"))
     text = json.dumps(doc, indent=1, allow_nan=False)
     if out is not None:

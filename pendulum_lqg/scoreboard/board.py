@@ -120,21 +120,46 @@ def _aggregate(values: list[float | None], fmt: Callable[[float], str]) -> str:
     return f"{fmt(agg['iqm'])} [{fmt(lo)}, {fmt(hi)}]"
 
 
-def methods_table(scores: Scores, suites: list[str], prints: dict[str, str]) -> list[str]:
-    """The lines of the methods table (empty without a score file that names its ``method``):
-    per method and suite, the IQM over its runs of success and failure-aware score, with their
-    stratified bootstrap 95 % intervals. A second file of the same method and seed is not
-    counted twice: it is named in a note under the table."""
+def method_runs(scores: Scores, repeated: list[str] | None = None,
+                ) -> dict[str, dict[int | str, dict[str, Any]]]:
+    """The score files that name a ``method``, by method and training seed (a file without a
+    seed under its own name). A second file of the same method and seed is not counted twice:
+    it is named in ``repeated``."""
     runs: dict[str, dict[int | str, dict[str, Any]]] = {}
-    repeated: list[str] = []
     for path, d in sorted(scores, key=lambda item: item[0].name):
         if d.get("method") is None:
             continue
         seeds = runs.setdefault(d["method"], {})
         if d["seed"] in seeds:
-            repeated.append(f"{path.name} (`{d['method']}` seed {d['seed']})")
+            if repeated is not None:
+                repeated.append(f"{path.name} (`{d['method']}` seed {d['seed']})")
             continue
         seeds[path.name if d["seed"] is None else d["seed"]] = d
+    return runs
+
+
+def comparable(seeds: dict[int | str, dict[str, Any]], suite: str, prints: dict[str, str],
+               ) -> list[dict[str, Any]]:
+    """The suite entries of a method's runs that the board compares: applicable, and played on
+    the board's version of ``suite`` (its fingerprint in ``prints``)."""
+    return [d["suites"][suite] for d in seeds.values() if suite in d["suites"]
+            and d["suites"][suite]["fingerprint"] == prints[suite]
+            and d["suites"][suite].get("applicable", True)]
+
+
+def board_fingerprints(scores: Scores, suites: list[str]) -> dict[str, str]:
+    """Per suite, the fingerprint most of the score files were played on: the board's version."""
+    return {s: Counter(d["suites"][s]["fingerprint"] for _, d in scores if s in d["suites"])
+            .most_common(1)[0][0] for s in suites}
+
+
+def methods_table(scores: Scores, suites: list[str], prints: dict[str, str]) -> list[str]:
+    """The lines of the methods table (empty without a score file that names its ``method``):
+    per method and suite, the IQM over its runs of success and failure-aware score, with their
+    stratified bootstrap 95 % intervals. A second file of the same method and seed is not
+    counted twice: it is named in a note under the table."""
+    repeated: list[str] = []
+    runs = method_runs(scores, repeated)
     if not runs:
         return []
     head = ["method", "runs (seeds)"] + [f"{_md(s)}: {c}" for s in suites for c in ("success",
@@ -144,9 +169,7 @@ def methods_table(scores: Scores, suites: list[str], prints: dict[str, str]) -> 
         listed = ", ".join(str(k) for k in sorted(k for k in seeds if isinstance(k, int)))
         cells = [f"`{_md(method)}`", f"{len(seeds)}" + (f" ({listed})" if listed else "")]
         for s in suites:
-            entries = [d["suites"][s] for d in seeds.values() if s in d["suites"]
-                       and d["suites"][s]["fingerprint"] == prints[s]
-                       and d["suites"][s].get("applicable", True)]
+            entries = comparable(seeds, s, prints)
             cells += [_aggregate([e["success_rate"] for e in entries], lambda v: f"{100 * v:.0f} %"),
                       _aggregate([e["score_mean"] for e in entries], lambda v: f"{v:.2f}")]
         lines.append("| " + " | ".join(cells) + " |")
@@ -177,19 +200,28 @@ def _reference_lines(scores: Scores, suites: list[str], prints: dict[str, str]) 
     return lines
 
 
+def board_scores(folder: Path, *, skipped: list[str] | None = None,
+                 ) -> tuple[Scores, list[str], dict[str, str]]:
+    """The score files of ``folder`` (:func:`read_scores`), the suites they hold in
+    :data:`~pendulum_lqg.scoreboard.suites.SUITE_ORDER`, and the board's fingerprint of each
+    (:func:`board_fingerprints`); every comparable entry has its ``score_mean`` (computed from
+    its rows where an older file has none)."""
+    scores = read_scores(folder, skipped=skipped)
+    names = {n for _, d in scores for n in d["suites"]}
+    suites = [n for n in SUITE_ORDER if n in names] + sorted(names - set(SUITE_ORDER))
+    prints = board_fingerprints(scores, suites)
+    _with_scores(scores, prints)
+    return scores, suites, prints
+
+
 def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> str:
     """The Markdown board of the score files in ``folder``. Damaged files are skipped and listed
     under the table (and each reported to ``warn``, one line; see :func:`read_scores`)."""
     skipped: list[str] = []
-    scores = read_scores(folder, skipped=skipped)
+    scores, suites, prints = board_scores(folder, skipped=skipped)
     for line in skipped:
         if warn is not None:
             warn(f"board: {line}")
-    names = {n for _, d in scores for n in d["suites"]}
-    suites = [n for n in SUITE_ORDER if n in names] + sorted(names - set(SUITE_ORDER))
-    prints = {s: Counter(d["suites"][s]["fingerprint"] for _, d in scores if s in d["suites"])
-              .most_common(1)[0][0] for s in suites}
-    _with_scores(scores, prints)
     head = ["entry", "kind"] + [f"{_md(s)}: {c}" for s in suites
                                 for c in ("success", "J", "gap", "score")]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]

@@ -7,6 +7,7 @@ it was trained (the training script writes it)::
      "method": "ppo-history", "seed": 3,   # the run: a method and its training seed (optional)
      "frame_stack": 8,               # frames of the history (1: none)
      "past_actions": true,           # each frame is [y, previous action] (default false)
+     "estimator": "kalman",          # frames of the reference Kalman filter's x̂ instead of y (optional)
      "obs_norm": {"mean": [...], "var": [...], "clip": 10.0, "epsilon": 1e-8},  # of the stack, or null
      "normalize_action": false,      # trained on actions in [−1, 1]
      "env": {...},                   # the env keywords it was trained on
@@ -44,11 +45,13 @@ class SB3Agent:
 
     def __init__(self, model: Any, *, frame_stack: int = 1,
                  obs_norm: dict[str, Any] | None = None, past_actions: bool = False,
-                 low: Any = -np.inf, high: Any = np.inf) -> None:
+                 estimator: str | None = None, low: Any = -np.inf, high: Any = np.inf,
+                 config: Any = None, normalize_action: bool | None = None) -> None:
         self.model, self.obs_norm = model, obs_norm
-        self.design = ObservationDesign(frame_stack, past_actions)
+        self.design = ObservationDesign(frame_stack, past_actions, estimator)
         self.frame_stack = frame_stack
         self._bounds = (low, high)
+        self._env = {"config": config, "normalize_action": normalize_action}
         self._history: ObservationHistory | None = None
         self._action: np.ndarray | None = None
         self._state: Any = None
@@ -60,7 +63,8 @@ class SB3Agent:
         obs = np.asarray(observation, dtype=float).reshape(1, -1)
         start = self._history is None
         if self._history is None:
-            self._history = ObservationHistory(self.design, 1, obs.shape[1], *self._bounds)
+            self._history = ObservationHistory(self.design, 1, obs.shape[1], *self._bounds,
+                                               **self._env)
             stack = self._history.reset(obs)
         else:
             assert self._action is not None
@@ -117,10 +121,12 @@ class SB3Factory:
         if mode != trained_on:
             raise NotApplicable(f"agent sb3:{self.path_text} was trained on observation_mode = "
                                 f"{trained_on!r}; this suite's env has {mode!r}")
-        space = env.action_space
-        return SB3Agent(self.model, frame_stack=self.meta["frame_stack"],
-                        obs_norm=self.meta["obs_norm"], past_actions=self.meta["past_actions"],
-                        low=getattr(space, "low", -np.inf), high=getattr(space, "high", np.inf))
+        space, base = env.action_space, env.unwrapped
+        return SB3Agent(self.model, obs_norm=self.meta["obs_norm"],
+                        **ObservationDesign.of(self.meta).record(),
+                        low=getattr(space, "low", -np.inf), high=getattr(space, "high", np.inf),
+                        config=getattr(base, "config", None),
+                        normalize_action=getattr(base, "normalize_action", None))
 
 
 def file_sha256(path: Path) -> str:

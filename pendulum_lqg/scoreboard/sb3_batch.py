@@ -59,8 +59,8 @@ def _chunk(suite: Suite, factory: Any, seeds: list[int], first: int, normalized:
     meta = factory.meta
     space: Any = env.single_action_space
     obs_dim = int(np.prod(env.single_observation_space.shape or (1,)))
-    history = ObservationHistory(ObservationDesign(meta["frame_stack"], meta["past_actions"]), n,
-                                 obs_dim, space.low, space.high)
+    history = ObservationHistory(ObservationDesign.of(meta), n, obs_dim, space.low, space.high,
+                                 config=suite.config, normalize_action=normalized)
     obs, _ = env.reset(seed=seeds)
     stack = history.reset(obs)
     state: Any = None

@@ -138,12 +138,16 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
                 normalize_action: bool = False, nthread: int | None = None,
                 base_dir: Path | None = None,
                 cache: dict[tuple[str, str, str], list[dict[str, Any]]] | None = None,
-                on_suite: Callable[[str], None] | None = None) -> dict[str, Any]:
+                on_suite: Callable[[str], None] | None = None,
+                noise_scale: float | None = None) -> dict[str, Any]:
     """The score file of one entry — a built-in or plug-in ``policy`` (the batch path), or a
     Gymnasium ``agent`` reference (the env path) — on ``suites``: what ``pendulum-lqg score``
     writes. ``cache`` (suite fingerprint, kind, policy) → rows keeps the references' and the
     full-state bounds' rows between entries (the leaderboard scores many entries at once; the
-    rows are the same ones either way); ``on_suite(name)`` is told when a suite is done."""
+    rows are the same ones either way); ``on_suite(name)`` is told when a suite is done;
+    ``noise_scale`` plays every suite at that noise (the noise ladder:
+    :meth:`~pendulum_lqg.scoreboard.suites.Suite.with_noise_scale`) and is written into the
+    score file."""
     from pendulum_lqg.bench.results import versions
     from pendulum_lqg.errors import ConfigError
     from pendulum_lqg.plugins import guard, is_plugin_ref
@@ -151,6 +155,7 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
 
     if (policy is None) == (agent is None):
         raise ConfigError("score: give one POLICY or one --agent REF")
+    suites = [s.with_noise_scale(noise_scale) for s in suites]
     memo: dict[tuple[str, str, str], list[dict[str, Any]]] = {} if cache is None else cache
 
     def cached(s: Suite, kind: str, name: str,
@@ -190,8 +195,9 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
                 return reference_of(s)
             return ep.policy_rows(s, policy, base_dir=base_dir, nthread=nthread)
 
-    return score_document(name, kind, suites, rows_of, reference_of, bound_of,
-                          {**versions(), **extra_versions}, on_suite, run)
+    doc = score_document(name, kind, suites, rows_of, reference_of, bound_of,
+                         {**versions(), **extra_versions}, on_suite, run)
+    return doc if noise_scale is None else {**doc, "noise_scale": noise_scale}
 
 
 def _run_of(factory: Any) -> tuple[dict[str, Any] | None, dict[str, str]]:

@@ -133,6 +133,24 @@ def probability_of_improvement(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.mean(per_suite))
 
 
+def probability_of_improvement_ci(x: np.ndarray, y: np.ndarray, *,
+                                  resamples: int = BOOTSTRAP_RESAMPLES, seed: int = BOOTSTRAP_SEED,
+                                  level: float = 0.95) -> tuple[float, float]:
+    """The percentile interval of :func:`probability_of_improvement` over stratified bootstrap
+    resamples: in each, the runs of ``x`` and of ``y`` are drawn with replacement within each
+    suite, independently (rliable's two-sample stratified bootstrap)."""
+    a, b = as_runs_by_suites(x), as_runs_by_suites(y)
+    rng = np.random.default_rng(seed)
+    cols_a, cols_b = np.arange(a.shape[1]), np.arange(b.shape[1])
+    stats = [probability_of_improvement(
+                 a[rng.integers(0, a.shape[0], size=a.shape), cols_a],
+                 b[rng.integers(0, b.shape[0], size=b.shape), cols_b])
+             for _ in range(resamples)]
+    tail = 100 * (1 - level) / 2
+    lo, hi = np.percentile(stats, [tail, 100 - tail])
+    return float(lo), float(hi)
+
+
 def aggregate(scores: np.ndarray) -> dict[str, Any]:
     """IQM and mean of a ``(runs, suites)`` array with their stratified bootstrap 95 % intervals:
     the figures a board row shows for one method."""

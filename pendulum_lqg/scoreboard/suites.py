@@ -86,6 +86,15 @@ class Suite:
                      _episodes(f"suite {self.name!r}: episodes", episodes), self.seed,
                      dict(self.env), origin=self.origin)
 
+    def with_noise_scale(self, noise_scale: float | None) -> Suite:
+        """The same suite with its env's ``noise_scale`` set to ``noise_scale`` (both noises'
+        standard deviations times it; the designs keep the nominal noise): the noise ladder. Its
+        fingerprint differs from the suite's unless the scale is the suite's own."""
+        if noise_scale is None:
+            return self
+        return Suite(self.name, self.version, self.purpose, self.reference, self.episodes,
+                     self.seed, {**self.env, "noise_scale": noise_scale}, origin=self.origin)
+
     def errors_named(self, what: str, exc: PendulumLQGError) -> PendulumLQGError:
         """``exc`` found while playing ``what`` of the suite, as one line naming the suite's file
         (an error in the suite must not read as one in the entry scored on it)."""

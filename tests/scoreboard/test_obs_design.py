@@ -79,13 +79,14 @@ class _Linear:
 
 
 @pytest.mark.parametrize("bases", _bases())
-@pytest.mark.parametrize("design", [ObservationDesign(4, past_actions=True), ObservationDesign(3)],
-                         ids=["history", "frames"])
+@pytest.mark.parametrize("design", [ObservationDesign(4, past_actions=True), ObservationDesign(3),
+                                    ObservationDesign(2, past_actions=True, estimator="kalman")],
+                         ids=["history", "frames", "kalman"])
 def test_training_observations_are_what_the_scorer_rebuilds_from_the_record(bases, design):
     vec_base, wrapper_base = bases
     n, seed = 2, 21
     venv = history_vec_env(native_vec_env(n, base=vec_base, seed=seed, **ENV), design,
-                           base=wrapper_base)
+                           base=wrapper_base, normalize_action=True)
     norm = {"mean": np.full(venv.observation_space.shape[0], 0.1).tolist(),
             "var": np.full(venv.observation_space.shape[0], 2.0).tolist(), "clip": 5.0,
             "epsilon": 1e-8}
@@ -101,10 +102,12 @@ def test_training_observations_are_what_the_scorer_rebuilds_from_the_record(base
     terminal = infos[0]["terminal_observation"]
     assert terminal.shape == (venv.observation_space.shape[0],)
     record = design.record()
-    assert record == {"frame_stack": design.frame_stack, "past_actions": design.past_actions}
+    assert record == {"frame_stack": design.frame_stack, "past_actions": design.past_actions,
+                      **({"estimator": "kalman"} if design.estimator else {})}
     env = gym.make(pendulum_lqg.ENV_ID, **ENV)
     agent = SB3Agent(_Linear(terminal.size), obs_norm=norm, low=env.action_space.low,
-                     high=env.action_space.high, **record)
+                     high=env.action_space.high, config=env.unwrapped.config,
+                     normalize_action=True, **record)
     y, _ = env.reset(seed=seed)                   # row 0 = a single env reset with the seed
     agent.reset()
     for _ in trained_on:

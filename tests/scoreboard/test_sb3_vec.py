@@ -126,6 +126,7 @@ def test_without_stable_baselines3_the_adapter_is_one_line(monkeypatch):
     import sys
 
     monkeypatch.setitem(sys.modules, "stable_baselines3", None)     # import fails
+    monkeypatch.setitem(sys.modules, "stable_baselines3.common", None)  # also once imported
     monkeypatch.setitem(sys.modules, "stable_baselines3.common.vec_env", None)
     with pytest.raises(ConfigError, match=r"^native_vec_env needs stable-baselines3 \(install"):
         native_vec_env(N)

@@ -84,3 +84,25 @@ def test_aggregate_reports_iqm_and_mean_with_intervals():
     assert agg["runs"] == 5
     assert agg["iqm_ci"][0] <= agg["iqm"] <= agg["iqm_ci"][1]
     assert agg["mean"] == pytest.approx(x.mean())
+
+
+def test_probability_of_improvement_interval_brackets_it_and_is_sure_of_a_clear_winner():
+    rng = np.random.default_rng(4)
+    x, y = rng.normal(0.5, 1.0, size=(5, 3)), rng.normal(0.0, 1.0, size=(5, 3))
+    lo, hi = stats.probability_of_improvement_ci(x, y)
+    assert lo <= stats.probability_of_improvement(x, y) <= hi and hi - lo > 0.1
+    assert stats.probability_of_improvement_ci(x + 10.0, y) == (1.0, 1.0)
+    assert stats.probability_of_improvement_ci(y, x + 10.0) == (0.0, 0.0)
+
+
+@pytest.mark.parametrize("runs", [10, 40])
+def test_the_iqm_interval_of_one_suite_matches_scipy_bootstrap(runs):
+    # one suite: the stratified bootstrap is the plain one; scipy's percentile bootstrap of
+    # trim_mean over the same runs gives the same interval up to resampling noise
+    x = np.random.default_rng(runs).gamma(2.0, size=runs)
+    ours = stats.stratified_bootstrap_ci(x, stats.interquartile_mean, resamples=4000)
+    res = sps.bootstrap((x,), lambda v, axis=-1: sps.trim_mean(v, 0.25, axis=axis),
+                        n_resamples=4000, method="percentile", random_state=1)
+    scale = x.std() / np.sqrt(runs)
+    assert ours[0] == pytest.approx(res.confidence_interval.low, abs=0.25 * scale)
+    assert ours[1] == pytest.approx(res.confidence_interval.high, abs=0.25 * scale)

@@ -1,0 +1,201 @@
+"""The RL baselines' comparisons across training runs: performance profiles, probabilities of
+improvement and learning curves, from the committed score files and curves (nothing is trained).
+
+    uv run python benchmarks/rl_figures.py profile docs/leaderboard/scores   # → profile.png, improvement.md
+    uv run python benchmarks/rl_figures.py curves experiments/agents/models  # → curves.png
+
+``profile``: the score files that name a ``method`` (one per training seed, as ``board``'s methods
+table reads them) and the single entries named by ``--entry`` (default the LQG reference
+``dlqr+kalman``), on the board's version of every measurement suite. Per method, the runs × suites
+array of failure-aware scores (:mod:`pendulum_lqg.scoreboard.stats`: ``J_ref / J``, 0 for a failed
+episode) gives
+
+* ``profile.png`` — the performance profile: the share of run × suite scores above each threshold
+  τ, with its stratified bootstrap 95 % band (Agarwal et al. 2021, Fig. 5);
+* ``improvement.md`` — the probability of improvement ``P(X > Y)`` of each method over each other,
+  with its stratified bootstrap 95 % interval, and the suites it is taken over.
+
+``curves``: every ``METHOD-seedS-curve.csv`` (``benchmarks/train_agents.py``: success rate and
+failure-aware score on 20 fixed non-suite episodes every ``--eval-every`` env steps) grouped by
+method, and ``curves.png``: per method the median and the interquartile range across seeds of
+success and score against env steps and against wall time. A run's points are linearly
+interpolated onto a common grid inside its own range (a grid point beyond a run's last point
+leaves that run out there); the figure says how many seeds each method has.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import re
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+OUT = ROOT / "docs" / "leaderboard"
+#: Thresholds τ of the performance profile (failure-aware score; 1 = the reference).
+TAUS = np.linspace(0.0, 1.25, 126)
+CURVE_FILE = re.compile(r"^(?P<method>.+)-seed(?P<seed>\d+)-curve\.csv$")
+
+
+# ---- performance profile and probability of improvement ----------------------------------------
+def method_scores(folder: Path, entries: list[str]) -> tuple[list[str], dict[str, np.ndarray]]:
+    """``(suites, {method: (runs, suites) failure-aware scores})`` over the measurement suites
+    every method was scored on; a named entry (``--entry``) is one run of its own."""
+    from pendulum_lqg.scoreboard.board import board_scores, comparable, method_runs
+
+    scores, suites, prints = board_scores(folder)
+    groups: dict[str, dict[Any, dict[str, Any]]] = dict(method_runs(scores))
+    for name in entries:
+        found = [d for _, d in scores if d["policy"] == name]
+        if not found:
+            raise SystemExit(f"error: --entry: no score file of {name!r} in {folder}")
+        groups[name] = {name: found[0]}
+    suites = [s for s in suites if s != "full-state"]
+    groups = {m: runs for m, runs in groups.items()      # methods of the measurement suites
+              if any(comparable(runs, s, prints) for s in suites)}
+    measured = [s for s in suites if all(comparable(runs, s, prints) for runs in groups.values())]
+    if not groups or not measured:
+        raise SystemExit(f"error: {folder}: no method with comparable scores on a measurement suite")
+    out = {}
+    for method, runs in groups.items():
+        table = [[comparable({0: d}, s, prints) for s in measured] for d in runs.values()]
+        out[method] = np.array([[e[0]["score_mean"] for e in row] for row in table
+                                if all(row)], dtype=float)      # runs scored on every suite
+    return measured, out
+
+
+def draw_profile(scores: dict[str, np.ndarray], suites: list[str], path: Path) -> None:
+    from matplotlib.figure import Figure
+
+    from pendulum_lqg.scoreboard.stats import performance_profile, stratified_bootstrap_ci
+
+    fig = Figure(figsize=(7.0, 4.2), layout="constrained")
+    ax = fig.add_subplot()
+    for method, x in sorted(scores.items()):
+        curve = performance_profile(x, TAUS)
+        line, = ax.plot(TAUS, curve, label=f"{method} ({x.shape[0]} runs)")
+        if x.shape[0] > 1:
+            band = np.array([stratified_bootstrap_ci(
+                x, lambda s, t=t: float(performance_profile(s, [t])[0]), resamples=500)
+                for t in TAUS])
+            ax.fill_between(TAUS, band[:, 0], band[:, 1], color=line.get_color(), alpha=0.2)
+    ax.axvline(1.0, color="0.5", lw=0.8, ls=":")
+    ax.set(xlabel="failure-aware score τ (J_ref / J, 0 for a failure; 1 = the LQG reference)",
+           ylabel="share of run × suite scores > τ", ylim=(-0.02, 1.02),
+           title="Performance profile over " + ", ".join(suites))
+    ax.legend(fontsize=8, loc="lower left")
+    fig.savefig(path, dpi=120)
+
+
+def improvement_table(scores: dict[str, np.ndarray], suites: list[str]) -> str:
+    from pendulum_lqg.scoreboard.stats import (
+        probability_of_improvement,
+        probability_of_improvement_ci,
+    )
+
+    names = sorted(scores)
+    lines = ["| P(row > column) | " + " | ".join(f"`{n}`" for n in names) + " |",
+             "|---|" + "---|" * len(names)]
+    for a in names:
+        cells = []
+        for b in names:
+            if a == b:
+                cells.append("–")
+                continue
+            p = probability_of_improvement(scores[a], scores[b])
+            lo, hi = probability_of_improvement_ci(scores[a], scores[b])
+            cells.append(f"{p:.2f} [{lo:.2f}, {hi:.2f}]")
+        lines.append(f"| `{a}` | " + " | ".join(cells) + " |")
+    lines += ["", "P(X > Y): the probability that a run of X has a higher failure-aware score than "
+              "a run of Y on the same suite (ties ½), averaged over the suites "
+              + ", ".join(f"`{s}`" for s in suites) + ", with its 95 % stratified bootstrap "
+              "interval (runs resampled within each suite, 2 000 resamples). Made by `uv run "
+              "python benchmarks/rl_figures.py profile docs/leaderboard/scores`."]
+    return "\n".join(lines) + "\n"
+
+
+# ---- learning curves ------------------------------------------------------------------------------
+def read_curves(folder: Path) -> dict[str, list[dict[str, np.ndarray]]]:
+    """``{method: [run, …]}``, each run its curve's columns as arrays (``METHOD-seedS-curve.csv``)."""
+    out: dict[str, list[dict[str, np.ndarray]]] = {}
+    for path in sorted(folder.glob("*-curve.csv")):
+        match = CURVE_FILE.match(path.name)
+        if match is None:
+            continue
+        with path.open(newline="", encoding="utf-8") as f:
+            rows = list(csv.DictReader(f))
+        if not rows:
+            continue
+        cols = {k: np.array([float(r[k]) if r[k] not in ("", "None") else np.nan for r in rows])
+                for k in ("env_steps", "wall_seconds", "success_rate", "score_mean")}
+        out.setdefault(match["method"], []).append(cols)
+    if not out:
+        raise SystemExit(f"error: {folder}: no METHOD-seedS-curve.csv")
+    return out
+
+
+def median_iqr(runs: list[dict[str, np.ndarray]], x: str, y: str,
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(grid, median, q25, q75)`` across runs of ``y`` against ``x``, each run interpolated
+    inside its own range (nan outside it)."""
+    grid = np.linspace(0.0, max(float(r[x].max()) for r in runs), 101)
+    table = np.array([np.where((grid >= r[x].min()) & (grid <= r[x].max()),
+                               np.interp(grid, r[x], r[y]), np.nan) for r in runs])
+    seen = np.isfinite(table).any(axis=0)
+    q = np.full((3, grid.size), np.nan)
+    q[:, seen] = np.nanpercentile(table[:, seen], [50, 25, 75], axis=0)
+    return grid, q[0], q[1], q[2]
+
+
+def draw_curves(curves: dict[str, list[dict[str, np.ndarray]]], path: Path) -> None:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10.0, 6.5), layout="constrained")
+    axes = fig.subplots(2, 2, sharey="row")
+    for method, runs in sorted(curves.items()):
+        for col, (x, scale, label) in enumerate((("env_steps", 1e6, "env steps [millions]"),
+                                                 ("wall_seconds", 3600.0, "wall time [h]"))):
+            for row, (y, name) in enumerate((("success_rate", "success rate"),
+                                             ("score_mean", "failure-aware score"))):
+                ax = axes[row, col]
+                grid, med, lo, hi = median_iqr(runs, x, y)
+                line, = ax.plot(grid / scale, med, label=f"{method} ({len(runs)} seeds)")
+                ax.fill_between(grid / scale, lo, hi, color=line.get_color(), alpha=0.2)
+                ax.set(xlabel=label, ylabel=name)
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle("Learning curves: median and interquartile range across seeds "
+                 "(20 fixed non-suite episodes per point)")
+    fig.savefig(path, dpi=120)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="what", required=True)
+    p = sub.add_parser("profile", help="performance profile and probability of improvement")
+    p.add_argument("scores", type=Path, help="folder of score files (board's)")
+    p.add_argument("--entry", action="append", default=None,
+                   help="a single entry to add by its policy name (default: dlqr+kalman)")
+    p.add_argument("--out", type=Path, default=OUT)
+    p = sub.add_parser("curves", help="learning curves across seeds")
+    p.add_argument("models", type=Path, help="folder of METHOD-seedS-curve.csv")
+    p.add_argument("--out", type=Path, default=OUT)
+    args = ap.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
+    if args.what == "profile":
+        suites, scores = method_scores(args.scores, args.entry or ["dlqr+kalman"])
+        draw_profile(scores, suites, args.out / "profile.png")
+        (args.out / "improvement.md").write_text(improvement_table(scores, suites),
+                                                 encoding="utf-8")
+        print(f"wrote {args.out / 'profile.png'} and {args.out / 'improvement.md'}")
+    else:
+        draw_curves(read_curves(args.models), args.out / "curves.png")
+        print(f"wrote {args.out / 'curves.png'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
