@@ -15,9 +15,9 @@ from pendulum_lqg.cli.theory import limit_fields
 def cmd_run(args: argparse.Namespace) -> int:
     from pendulum_lqg.core.metrics import summarize
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.limits import MAX_RECORDED_EPISODES, MAX_RUN_EPISODES, check_at_most
-    from pendulum_lqg.plant import Randomization, load_plant
-    from pendulum_lqg.plugins import build_policy, is_plugin_ref, split_builtin
+    from pendulum_lqg.model.plant import Randomization, load_plant
+    from pendulum_lqg.policies.loading import build_policy, is_plugin_ref, split_builtin
+    from pendulum_lqg.util.limits import MAX_RECORDED_EPISODES, MAX_RUN_EPISODES, check_at_most
 
     if args.policy is not None and (args.controller or args.observer):
         raise cfg_error("--policy: give either --policy or --controller/--observer, not both")
@@ -57,7 +57,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     config = {"policy": policy.name, "seed": args.seed, "episodes": args.episodes,
               "backend": args.backend, "scenario": scenario.to_dict(),
               "design": None if plugin else _dataclass_dict(spec), "model": str(plant.path)}
-    from pendulum_lqg import SCHEMA_VERSION
+    from pendulum_lqg.version import SCHEMA_VERSION
 
     out = {"schema_version": SCHEMA_VERSION, "config": config,
            "success_rate": summary["success_rate"],
@@ -85,7 +85,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 def _watchdog(args: argparse.Namespace) -> Any:
     """The watchdog of the plug-in's calls (``--call-timeout``)."""
-    from pendulum_lqg.watchdog import call_timeout
+    from pendulum_lqg.util.watchdog import call_timeout
 
     return call_timeout(args.call_timeout)
 
@@ -93,8 +93,8 @@ def _watchdog(args: argparse.Namespace) -> Any:
 def _check_recording_target(args: argparse.Namespace) -> None:
     """The recording's file, checked before any episode runs: not '' or a folder, and a new path
     or a regular file (never a device or a FIFO)."""
-    from pendulum_lqg.files import output_file
     from pendulum_lqg.record.writer import recording_path
+    from pendulum_lqg.util.files import output_file
 
     output_file("--record", recording_path(args.record if args.record is not None
                                            else DEFAULT_RECORDING), what="recording")
@@ -198,11 +198,11 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None
 def _run_in_batches(plant: Any, scenario: Any, policy: Any, args: argparse.Namespace, *,
                     trajectory: bool) -> Any:
     """``run_episodes`` over ``--episodes`` in batches (memory flat in the episode count; the rows
-    do not depend on the batching), with its progress on stderr (:mod:`pendulum_lqg.progress`)."""
-    from pendulum_lqg import limits
+    do not depend on the batching), with its progress on stderr (:mod:`pendulum_lqg.util.progress`)."""
     from pendulum_lqg.core.runner import BatchResult, run_episodes
-    from pendulum_lqg.plant import steps_per_period
-    from pendulum_lqg.progress import Progress
+    from pendulum_lqg.model.plant import steps_per_period
+    from pendulum_lqg.util import limits
+    from pendulum_lqg.util.progress import Progress
 
     steps = scenario.n_periods * steps_per_period(plant, scenario.control_period)
     size = max(1, min(limits.RUN_BATCH, 20_000_000 // max(steps, 1)))    # ≤ ~2·10⁷ physics steps each

@@ -10,10 +10,10 @@ import sys
 from collections.abc import Callable
 from typing import Any, NoReturn
 
-from pendulum_lqg import __version__
 from pendulum_lqg.cli.score import add_call_timeout
 from pendulum_lqg.cli.score import add_parsers as add_score_parsers
 from pendulum_lqg.names import CONTROLLERS, LECTURE_POLICIES, OBSERVERS, PLANTS
+from pendulum_lqg.version import __version__
 
 EXIT_USAGE = 2
 
@@ -335,7 +335,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 # ---- helpers -------------------------------------------------------------------------------------
 def jsonable(obj: Any) -> Any:
-    from pendulum_lqg.jsonio import plain
+    from pendulum_lqg.util.jsonio import plain
 
     return plain(obj)
 
@@ -362,7 +362,7 @@ def cfg_error(msg: str) -> Exception:
 def spec_from_args(args: argparse.Namespace, controller: str = "dlqr", observer: str = "kalman",
                     ) -> Any:
     """The built-in designs' options (weights, observer poles) from the command line."""
-    from pendulum_lqg.policy import DesignSpec
+    from pendulum_lqg.policies.lqg import DesignSpec
 
     kw: dict[str, Any] = {"controller": controller, "observer": observer}
     if args.q is not None:

@@ -2,7 +2,7 @@
 
 A :class:`Scenario` is validated once, when it is made; the loop, the runner and the envs take it
 as it is. It holds no physical parameter of the plant — those live in the MJCF model
-(:mod:`pendulum_lqg.plant`) — only what the experiment chooses.
+(:mod:`pendulum_lqg.model.plant`) — only what the experiment chooses.
 """
 
 from __future__ import annotations
@@ -13,12 +13,12 @@ from typing import Literal
 
 import numpy as np
 
-from pendulum_lqg._config import config_vector, positive_limit, positive_number
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.limits import MAX_DELAY_PERIODS, check_control_period, check_duration
+from pendulum_lqg.model.plant import ModelOverrides, Randomization
 from pendulum_lqg.names import PLANTS
-from pendulum_lqg.plant import ModelOverrides, Randomization
+from pendulum_lqg.util.config import config_vector, positive_limit, positive_number
+from pendulum_lqg.util.limits import MAX_DELAY_PERIODS, check_control_period, check_duration
 
 
 @dataclass(frozen=True)
@@ -60,7 +60,7 @@ class Scenario:
         rate: over physics step j the actuator applies the lag's exact response at the end of
         that step, ``f_j = u + (f_{j−1} − u)·e^{−h/τ}``
     randomize : per-episode parameter randomisation of the simulated plant
-        (:class:`~pendulum_lqg.plant.Randomization`; a mapping such as
+        (:class:`~pendulum_lqg.model.plant.Randomization`; a mapping such as
         ``{"pole_mass_scale": (0.8, 1.2)}`` is accepted)
     """
 

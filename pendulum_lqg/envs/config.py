@@ -18,15 +18,16 @@ from typing import Any, Literal, overload
 import numpy as np
 from gymnasium import spaces
 
-from pendulum_lqg._config import positive_number
 from pendulum_lqg.core.loop import Simulator
 from pendulum_lqg.core.noise import LECTURE_V, NoiseModel
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
-from pendulum_lqg.plant import ModelOverrides, Plant, load_plant
+from pendulum_lqg.model.plant import ModelOverrides, Plant, load_plant
+from pendulum_lqg.names import OBSERVATION_MODES
+from pendulum_lqg.util.config import positive_number
 
 ObservationMode = Literal["measurement", "state"]
-OBSERVATION_MODES: tuple[str, ...] = ("measurement", "state")
+
 
 #: Default reward scale: the cost rate [J/s] at which a step's reward is e⁻¹ (the lecture LQG
 #: policy runs at ≈ 3.4 J/s, the full-state LQR at ≈ 0.18 J/s).

@@ -23,16 +23,16 @@ from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import child_generator, episode_seed
 from pendulum_lqg.envs.agent import LQGAgent
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.estimators import (
+from pendulum_lqg.model.linearize import discretize_zoh, linearize
+from pendulum_lqg.model.plant import ModelOverrides, load_plant
+from pendulum_lqg.policies.estimators import (
     CurrentEstimator,
     DelayKalman,
     PredictorEstimator,
     TimeVaryingKalman,
 )
-from pendulum_lqg.linearize import discretize_zoh, linearize
-from pendulum_lqg.plant import ModelOverrides, load_plant
-from pendulum_lqg.plugins import build_policy
-from pendulum_lqg.policy import DesignSpec, design_policy, per_sample_process_covariance
+from pendulum_lqg.policies.loading import build_policy
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy, per_sample_process_covariance
 
 ID = "pendulum_lqg/CartPoleLQG-v0"
 BASELINE = Path(__file__).parents[1] / "data" / "pre_delay_baseline.json"

@@ -40,12 +40,14 @@ import numpy as np
 from scipy.linalg import expm
 
 from pendulum_lqg import design
-from pendulum_lqg._config import config_vector
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.core.rules import saturate
-from pendulum_lqg.design._checks import as_poles
+from pendulum_lqg.design.checks import as_poles
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.estimators import (
+from pendulum_lqg.model.linearize import ContinuousModel, discretize_zoh, linearize
+from pendulum_lqg.model.plant import Plant, steps_per_period
+from pendulum_lqg.names import CONTROLLERS, OBSERVERS
+from pendulum_lqg.policies.estimators import (
     CurrentEstimator,
     DelayKalman,
     Estimator,
@@ -55,9 +57,7 @@ from pendulum_lqg.estimators import (
     TrueState,
     mv,
 )
-from pendulum_lqg.linearize import ContinuousModel, discretize_zoh, linearize
-from pendulum_lqg.names import CONTROLLERS, OBSERVERS
-from pendulum_lqg.plant import Plant, steps_per_period
+from pendulum_lqg.util.config import config_vector
 
 Controller = Literal["lqr", "dlqr"]
 Observer = Literal["none", "luenberger", "kalman", "kalman-predictor", "kalman-tv", "kalman-bucy",
@@ -137,7 +137,7 @@ class DesignSpec:
 class Policy:
     """``u = sat(−K x̂)`` with an estimator; vectorised over a batch.
 
-    A built-in policy follows the same protocol as a user's plugin (:mod:`pendulum_lqg.plugins`):
+    A built-in policy follows the same protocol as a user's plugin (:mod:`pendulum_lqg.policies.loading`):
     ``reset(n)``, ``act(y) -> u``, ``select(rows)``, ``needs_state``, ``x_hat``.
 
     Attributes
@@ -252,7 +252,7 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
     control_period : T [s], a multiple of the physics step
     noise : nominal noise model (its ``scale`` is ignored: designs use the nominal densities)
     spec : controller / observer choice and weights
-    linear : a precomputed :func:`~pendulum_lqg.linearize.linearize` result (to save time)
+    linear : a precomputed :func:`~pendulum_lqg.model.linearize.linearize` result (to save time)
     delays : ``(measurement, actuator)`` delays in control periods that ``kalman-delay``
         compensates (:func:`delay_periods` of the scenario; the other observers ignore them)
     u_max : the force limit the policy saturates its own output to [N] (default the plant's
@@ -364,7 +364,7 @@ def design_all(plant: Plant, control_period: float, noise: NoiseModel,
     (filter and predictor gains), continuous / discrete Luenberger, and the separation checks of the
     continuous and the discrete (current-form) LQG loops.
     """
-    from pendulum_lqg.linearize import discretize_transition
+    from pendulum_lqg.model.linearize import discretize_transition
 
     spec = spec or DesignSpec()
     steps_per_period(plant, control_period)

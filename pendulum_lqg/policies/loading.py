@@ -46,14 +46,14 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError, PluginError
-from pendulum_lqg.watchdog import watched
+from pendulum_lqg.util.watchdog import watched
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.noise import NoiseModel
     from pendulum_lqg.core.protocol import PolicyProtocol
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.plant import Plant
-    from pendulum_lqg.policy import DesignSpec
+    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.policies.lqg import DesignSpec
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,7 +83,7 @@ class PolicyContext:
         ``[−u_max, u_max]`` by the core (:func:`pendulum_lqg.core.rules.limits`).
     Q : (4, 4), R : (1, 1)
         Weights of the benchmark's cost ``J = ∫ xᵀQx + uᵀRu dt``.
-    plant : pendulum_lqg.plant.Plant
+    plant : pendulum_lqg.model.plant.Plant
         The nominal MuJoCo plant (advanced use: parameters, the compiled model).
     noise : pendulum_lqg.core.noise.NoiseModel
         The nominal noise model (``W``/``V`` above come from it).
@@ -111,9 +111,9 @@ class PolicyContext:
     def build(cls, plant: Plant, scenario: Scenario) -> PolicyContext:
         """The context of ``plant`` (nominal) under ``scenario``'s period, noise and cost."""
         from pendulum_lqg.core.rules import limits
-        from pendulum_lqg.linearize import discretize_zoh, linearize
-        from pendulum_lqg.plant import steps_per_period
-        from pendulum_lqg.policy import noise_design_matrices
+        from pendulum_lqg.model.linearize import discretize_zoh, linearize
+        from pendulum_lqg.model.plant import steps_per_period
+        from pendulum_lqg.policies.lqg import noise_design_matrices
 
         steps_per_period(plant, scenario.control_period)
         lin = linearize(plant)
@@ -150,7 +150,7 @@ def resolve_ref(ref: str, base_dir: Path | None = None) -> str:
         return ref
     path = Path(module).expanduser()
     if not path.is_absolute():
-        from pendulum_lqg.resources import data_dir
+        from pendulum_lqg.util.resources import data_dir
 
         candidates = [base_dir / path] if base_dir is not None else []
         candidates += [Path.cwd() / path, data_dir("experiments") / path]
@@ -284,8 +284,8 @@ def guard(label: str, what: str, fn: Callable[..., Any], *args: Any,
     turned into one :class:`PluginError` line ``LABEL: WHAT raised …``: every exception,
     ``SystemExit`` (``sys.exit`` in user code) included, except a Ctrl-C (``KeyboardInterrupt``),
     which stops the run as a Ctrl-C does. A call that does not return within the active
-    :class:`~pendulum_lqg.watchdog.Watchdog`'s limit is stopped with a
-    :class:`~pendulum_lqg.watchdog.CallTimeout` line. User code cannot end the run with a success
+    :class:`~pendulum_lqg.util.watchdog.Watchdog`'s limit is stopped with a
+    :class:`~pendulum_lqg.util.watchdog.CallTimeout` line. User code cannot end the run with a success
     status or without a message this way (``os._exit`` ends the process at once, uncatchable;
     docs/reliability.md). Exceptions of the types ``passing`` are re-raised as they are (an
     agent's factory declines a suite with :class:`~pendulum_lqg.errors.NotApplicable`)."""
@@ -503,7 +503,7 @@ def build_policy(name: str | None, *, plant: Plant, scenario: Scenario,
     base_dir : folder that relative plugin file paths are taken from (an experiment file's folder)
     context : a prebuilt :class:`PolicyContext` (saves re-linearising for many plugins)
     """
-    from pendulum_lqg.policy import DesignSpec, delay_periods, design_policy
+    from pendulum_lqg.policies.lqg import DesignSpec, delay_periods, design_policy
 
     spec = spec or DesignSpec()
     if name is not None and is_plugin_ref(name):
