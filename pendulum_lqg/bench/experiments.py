@@ -60,10 +60,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pendulum_lqg.bench.study_params import parse_study_params
+from pendulum_lqg.core import defaults
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.model.plant import ModelOverrides, Plant
-from pendulum_lqg.policies.lqg import CONTROLLERS, OBSERVERS, DesignSpec
+from pendulum_lqg.names import CONTROLLERS, OBSERVERS
+from pendulum_lqg.policies.spec import DesignSpec
 from pendulum_lqg.util.config import check_keys
 
 if TYPE_CHECKING:
@@ -380,7 +382,7 @@ def _grid_point(values: dict[str, Any], base: dict[str, dict[str, Any]],
                                   f"{kind!r}")
             tables["scenario"][f"{kind}_delay"] = value
         elif key == "theta0":
-            x0 = list(tables["scenario"].get("x0", (0.0, 0.1, 0.0, 0.0)))
+            x0 = list(tables["scenario"].get("x0", defaults.X0))
             x0[1] = value
             tables["scenario"]["x0"] = x0
         else:  # model scales

@@ -12,10 +12,25 @@ from pendulum_lqg.cli.theory import limit_fields
 
 
 # ---- run -----------------------------------------------------------------------------------------
+def scenario_from_args(args: argparse.Namespace) -> Any:
+    """The :class:`~pendulum_lqg.core.scenario.Scenario` of ``run``'s options (the cart-pole)."""
+    from pendulum_lqg.core.scenario import Scenario
+    from pendulum_lqg.model.plant import Randomization
+
+    noise = noise_from_args(args, scale=args.noise_scale)
+    return Scenario(control_period=args.dt, duration=args.duration, noise=noise,
+                    x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0,
+                    plant=args.plant,
+                    measurement_delay=args.measurement_delay,
+                    actuator_delay=args.actuator_delay, dropout=args.dropout,
+                    actuator_tau=args.actuator_tau,
+                    randomize=Randomization.from_mapping(_randomize(args.randomize)),
+                    **limit_fields(args))
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from pendulum_lqg.core.metrics import summarize
-    from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.model.plant import Randomization, load_plant
+    from pendulum_lqg.model.plant import load_plant
     from pendulum_lqg.policies.loading import build_policy, is_plugin_ref, split_builtin
     from pendulum_lqg.util.limits import MAX_RECORDED_EPISODES, MAX_RUN_EPISODES, check_at_most
 
@@ -31,15 +46,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             lti_res = _run_in_batches(lti, lti_sc, lti_policy, args, trajectory=False)
         return lti_report(args, lti_config, lti_sc, lti_res.rows)
     plant = load_plant(args.model)
-    noise = noise_from_args(args, scale=args.noise_scale)
-    scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,
-                        x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0,
-                        plant=args.plant,
-                        measurement_delay=args.measurement_delay,
-                        actuator_delay=args.actuator_delay, dropout=args.dropout,
-                        actuator_tau=args.actuator_tau,
-                        randomize=Randomization.from_mapping(_randomize(args.randomize)),
-                        **limit_fields(args))
+    scenario = scenario_from_args(args)
     plugin = is_plugin_ref(name)
     spec = spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
     policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)

@@ -12,15 +12,16 @@ from typing import Any, cast
 import numpy as np
 
 from pendulum_lqg.cli.parser import cfg_error, jsonable
+from pendulum_lqg.core import defaults
 
 #: Options of ``run`` that describe the cart-pole; with ``--lti`` the file says them instead
 #: (their value when not given, and what the file holds in their place).
-_CARTPOLE_ONLY = {"model": (None, "the file is the plant"), "theta0": (0.1, "the file's x0"),
+_CARTPOLE_ONLY = {"model": (None, "the file is the plant"), "theta0": (defaults.X0[1], "the file's x0"),
                   "q": (None, "the file's Q"), "r": (None, "the file's R"),
                   "w": (None, "the file's W"), "v": (None, "the file's V"),
                   "observer_poles": (None, "the file's observer_poles"),
                   "process_noise": ("state", "the file's G and W"),
-                  "theta_max": (0.5, "the file's state_limits"),
+                  "theta_max": (defaults.THETA_MAX, "the file's state_limits"),
                   "track_limit": (None, "the file's state_limits"),
                   "record": (None, "recordings draw the cart-pole"),
                   "spawn": (False, "recordings draw the cart-pole"),

@@ -13,6 +13,7 @@ from typing import Literal
 
 import numpy as np
 
+from pendulum_lqg.core import defaults
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.plant import ModelOverrides, Randomization
@@ -64,18 +65,18 @@ class Scenario:
         ``{"pole_mass_scale": (0.8, 1.2)}`` is accepted)
     """
 
-    control_period: float = 0.01
-    duration: float = 10.0
+    control_period: float = defaults.CONTROL_PERIOD
+    duration: float = defaults.DURATION
     noise: NoiseModel = field(default_factory=NoiseModel.lecture)
-    x0: tuple[float, ...] = (0.0, 0.1, 0.0, 0.0)
-    x0_std: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)
+    x0: tuple[float, ...] = defaults.X0
+    x0_std: tuple[float, ...] = defaults.X0_STD
     estimate0: Literal["zero", "true"] = "zero"
-    theta_max: float = 0.5
+    theta_max: float = defaults.THETA_MAX
     track_limit: float | None = None
     force_limit: float | None = None
     settle_band: float = 0.02
-    cost_Q: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
-    cost_R: float = 1.0
+    cost_Q: tuple[float, ...] = defaults.COST_Q
+    cost_R: float = defaults.COST_R
     overrides: ModelOverrides = field(default_factory=ModelOverrides)
     plant: str = "mujoco"
     measurement_delay: float = 0.0

@@ -113,13 +113,13 @@ class PolicyContext:
         from pendulum_lqg.core.rules import limits
         from pendulum_lqg.model.linearize import discretize_zoh, linearize
         from pendulum_lqg.model.plant import steps_per_period
-        from pendulum_lqg.policies.lqg import noise_design_matrices
+        from pendulum_lqg.policies.observers import noise_design_matrices
 
         steps_per_period(plant, scenario.control_period)
         lin = linearize(plant)
         dt = float(scenario.control_period)
         disc = discretize_zoh(lin, dt)
-        G, W_in = noise_design_matrices(lin, scenario.noise, dt)
+        G, W_in = noise_design_matrices(lin, scenario.noise)
         return cls(A=lin.A, B=lin.B, C=lin.C, Phi=disc.Phi, Gamma=disc.Gamma, dt=dt,
                    W=G @ W_in @ G.T, V=scenario.noise.V, u_max=limits(plant, scenario)[2],
                    Q=np.diag(scenario.cost_Q), R=np.array([[scenario.cost_R]]), plant=plant,

@@ -17,7 +17,8 @@ from pendulum_lqg.core.runner import MIN_SHARD_ROWS, run_episodes, shard_count
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import episode_seed
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.policies.lqg import OBSERVERS, DesignSpec, design_policy
+from pendulum_lqg.names import OBSERVERS
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
 LECTURE = Scenario()
 

@@ -12,7 +12,7 @@ import pytest
 from conftest import assert_close_to_stored
 from scipy.linalg import solve_discrete_are
 
-import pendulum_lqg  # noqa: F401  (registers the env ids)
+import pendulum_lqg
 from pendulum_lqg import design
 from pendulum_lqg.bench.experiments import parse_spec
 from pendulum_lqg.cli import main
@@ -34,7 +34,7 @@ from pendulum_lqg.policies.estimators import (
 from pendulum_lqg.policies.loading import build_policy
 from pendulum_lqg.policies.lqg import DesignSpec, design_policy, per_sample_process_covariance
 
-ID = "pendulum_lqg/CartPoleLQG-v0"
+ID = pendulum_lqg.ENV_ID           # reading it registers the id
 BASELINE = Path(__file__).parents[1] / "data" / "pre_delay_baseline.json"
 RANDOMIZE = {"pole_mass_scale": (0.5, 2.0), "pole_length_scale": (0.8, 1.25),
              "cart_mass_scale": (0.7, 1.3)}

@@ -32,7 +32,8 @@ from pendulum_lqg.envs.single import CartPoleLQGEnv
 from pendulum_lqg.envs.vector import CartPoleLQGVectorEnv
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.model.plant import load_plant
-from pendulum_lqg.policies.lqg import OBSERVERS, DesignSpec, design_policy
+from pendulum_lqg.names import OBSERVERS
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
 pytestmark = pytest.mark.filterwarnings("error")
 
