@@ -5,10 +5,9 @@ use, so ``import pendulum_lqg`` loads neither Gymnasium, numpy nor MuJoCo::
 
     from pendulum_lqg import Scenario, run_episodes, load_plant, build_policy
 
-    plant = load_plant()
-    scenario = Scenario()
-    policy = build_policy("dlqr+kalman", plant, scenario)
-    result = run_episodes(plant, policy, scenario, episodes=8, seed=0)
+    plant, scenario = load_plant(), Scenario()
+    policy = build_policy("dlqr+kalman", plant=plant, scenario=scenario)
+    rows = run_episodes(plant, scenario, policy, seed=0, episodes=range(8)).rows
 
 The Gymnasium environment :data:`ENV_ID` is registered when Gymnasium is already imported at the
 package's import, when :data:`ENV_ID` is read from the package, or by :func:`register_envs`::
