@@ -64,7 +64,7 @@ def workload(kind: str, count: int, public: bool = False) -> None:
                 sim.period[0] = 0
                 env.step(action)
     elif kind == "vector":
-        from pendulum_lqg.agent import LQGAgent
+        from pendulum_lqg import LQGAgent
         vec = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=64)
         agent = LQGAgent(vec)
         obs = [vec.reset(seed=1)[0]]
@@ -74,9 +74,9 @@ def workload(kind: str, count: int, public: bool = False) -> None:
             for _ in range(n):
                 obs[0] = vec.step(agent.act(obs[0]))[0]
     else:
-        from pendulum_lqg.plant import load_plant
-        from pendulum_lqg.policy import DesignSpec, design_policy
-        from pendulum_lqg.sim import Scenario, run_episodes
+        from pendulum_lqg import Scenario, run_episodes
+        from pendulum_lqg.model.plant import load_plant
+        from pendulum_lqg.policies.lqg import DesignSpec, design_policy
         plant, sc = load_plant(), Scenario(duration=2.0)
         policy = design_policy(plant, sc.control_period, sc.noise, DesignSpec("dlqr", "kalman"))
 

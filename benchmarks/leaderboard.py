@@ -16,10 +16,10 @@ import json
 import time
 from pathlib import Path
 
-from pendulum_lqg.files import atomic_write
 from pendulum_lqg.scoreboard.board import make_board
 from pendulum_lqg.scoreboard.score import score_entry
 from pendulum_lqg.scoreboard.suites import load_suite, suite_names
+from pendulum_lqg.util.files import atomic_write
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Built-in policies: every controller+observer pair the benchmark ships.

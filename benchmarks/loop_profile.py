@@ -28,8 +28,8 @@ from mujoco.batch import Batch
 
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.scenario import Scenario
-from pendulum_lqg.plant import load_plant, steps_per_period
-from pendulum_lqg.policy import DesignSpec, design_policy
+from pendulum_lqg.model.plant import load_plant, steps_per_period
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
 
 def main() -> None:

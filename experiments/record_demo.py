@@ -22,8 +22,8 @@ from pathlib import Path
 
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.scenario import Scenario
-from pendulum_lqg.plant import load_plant
-from pendulum_lqg.policy import DesignSpec, design_policy
+from pendulum_lqg.model.plant import load_plant
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 from pendulum_lqg.record import read_recording, record_episodes, verify_recording
 
 SEED, EPISODE = 0, 0

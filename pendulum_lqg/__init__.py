@@ -1,76 +1,116 @@
 """pendulum_lqg: LQG control of a MuJoCo cart-pole under noise — design, simulation, benchmark.
 
-Importing the package registers the Gymnasium environment :data:`ENV_ID` (``gymnasium.make``,
-``gymnasium.make_vec``), as Gymnasium 1.x environment packages do::
+The names a program needs are imported from the package itself; each loads its module on first
+use, so ``import pendulum_lqg`` loads neither Gymnasium, numpy nor MuJoCo::
+
+    from pendulum_lqg import Scenario, run_episodes, load_plant, build_policy
+
+    plant, scenario = load_plant(), Scenario()
+    policy = build_policy("dlqr+kalman", plant=plant, scenario=scenario)
+    rows = run_episodes(plant, scenario, policy, seed=0, episodes=range(8)).rows
+
+The Gymnasium environment :data:`ENV_ID` is registered when Gymnasium is already imported at the
+package's import, when :data:`ENV_ID` is read from the package, or by :func:`register_envs`::
 
     import gymnasium as gym
     import pendulum_lqg
 
-    gym.register_envs(pendulum_lqg)       # optional: marks the import as used
     env = gym.make(pendulum_lqg.ENV_ID)   # or gym.make("pendulum_lqg:pendulum_lqg/CartPoleLQG-v0")
 
-Registering imports Gymnasium (and numpy) but none of MuJoCo, python-control or the simulation
-core: those load when an environment is made. The one process that skips it is the
-``pendulum-lqg`` command itself, which never makes a Gymnasium env and whose ``--help`` must not wait
-for numpy (it can still call :func:`register_envs`).
-
-Public API (stable from 0.2.0; a change gets a version bump and a CHANGELOG.md entry): :data:`ENV_ID`,
-:class:`PolicyContext` and the policy-plugin protocol (:mod:`pendulum_lqg.plugins`), the CLI flags,
-and the results schema (:data:`SCHEMA_VERSION`).
+Public API (a change gets a version bump and a CHANGELOG.md entry): the names in :data:`__all__`,
+the policy-plugin protocol (:mod:`pendulum_lqg.policies.loading`), the CLI flags and the results
+schema (:data:`SCHEMA_VERSION`). Every other name is reached through its module's real path
+(docs/architecture.md has the map).
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 import sys
-from pathlib import PurePath
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.5.0"
-__all__ = ["ENV_ID", "SCHEMA_VERSION", "PolicyContext", "__version__", "register_envs"]
-
-#: The Gymnasium id of the cart-pole LQG environment (:class:`pendulum_lqg.envs.single.CartPoleLQGEnv`).
-ENV_ID = "pendulum_lqg/CartPoleLQG-v0"
-
-#: Version of the results schema (``summary.json``, ``episodes.csv``); see docs/results.md.
-SCHEMA_VERSION = 1
-
-# The registered defaults of the episode (``tests/test_env.py`` checks they are the env's own).
-_DEFAULT_DURATION = 10.0
-_DEFAULT_CONTROL_PERIOD = 0.01
+from pendulum_lqg.envs.registration import register_envs
+from pendulum_lqg.errors import ConfigError, DesignError, PendulumLQGError, PluginError, ShapeError
+from pendulum_lqg.version import SCHEMA_VERSION, __version__
 
 if TYPE_CHECKING:
-    from pendulum_lqg.plugins import PolicyContext
+    from pendulum_lqg.core.noise import NoiseModel
+    from pendulum_lqg.core.runner import BatchResult, run_episodes
+    from pendulum_lqg.core.scenario import Scenario
+    from pendulum_lqg.core.seeding import episode_seed
+    from pendulum_lqg.core.trajectory import Trajectory
+    from pendulum_lqg.envs.agent import LQGAgent
+    from pendulum_lqg.envs.config import EnvConfig
+    from pendulum_lqg.envs.registration import ENV_ID
+    from pendulum_lqg.envs.single import CartPoleLQGEnv
+    from pendulum_lqg.envs.vector import CartPoleLQGVectorEnv
+    from pendulum_lqg.model.plant import Plant, load_plant
+    from pendulum_lqg.policies.loading import PolicyContext, build_policy
+    from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
+#: Each name of the public API that loads on first use, and the module that defines it.
+LAZY: dict[str, str] = {
+    "Scenario": "pendulum_lqg.core.scenario",
+    "NoiseModel": "pendulum_lqg.core.noise",
+    "run_episodes": "pendulum_lqg.core.runner",
+    "BatchResult": "pendulum_lqg.core.runner",
+    "Trajectory": "pendulum_lqg.core.trajectory",
+    "episode_seed": "pendulum_lqg.core.seeding",
+    "Plant": "pendulum_lqg.model.plant",
+    "load_plant": "pendulum_lqg.model.plant",
+    "DesignSpec": "pendulum_lqg.policies.lqg",
+    "design_policy": "pendulum_lqg.policies.lqg",
+    "build_policy": "pendulum_lqg.policies.loading",
+    "PolicyContext": "pendulum_lqg.policies.loading",
+    "LQGAgent": "pendulum_lqg.envs.agent",
+    "EnvConfig": "pendulum_lqg.envs.config",
+    "CartPoleLQGEnv": "pendulum_lqg.envs.single",
+    "CartPoleLQGVectorEnv": "pendulum_lqg.envs.vector",
+}
 
-def register_envs() -> None:
-    """Register :data:`ENV_ID` (single and vector entry points) with Gymnasium, once.
-
-    Called when the package is imported. A behaviour change of the environment gets a new version
-    here (``-v1``), never an edit of v0.
-
-    The entry point :func:`pendulum_lqg.envs.single.make_env` wraps the env in its own ``TimeLimit`` of
-    ``duration / control_period`` steps, so ``max_episode_steps`` follows those keywords (a fixed
-    registered value would cut a longer episode short); hence no ``max_episode_steps`` here.
-    """
-    import gymnasium
-
-    if ENV_ID in gymnasium.registry:
-        return
-    gymnasium.register(
-        id=ENV_ID,
-        entry_point="pendulum_lqg.envs.single:make_env",
-        vector_entry_point="pendulum_lqg.envs.vector:CartPoleLQGVectorEnv",
-        kwargs={"duration": _DEFAULT_DURATION, "control_period": _DEFAULT_CONTROL_PERIOD},
-    )
+__all__ = [
+    "ENV_ID",
+    "SCHEMA_VERSION",
+    "BatchResult",
+    "CartPoleLQGEnv",
+    "CartPoleLQGVectorEnv",
+    "ConfigError",
+    "DesignError",
+    "DesignSpec",
+    "EnvConfig",
+    "LQGAgent",
+    "NoiseModel",
+    "PendulumLQGError",
+    "Plant",
+    "PluginError",
+    "PolicyContext",
+    "Scenario",
+    "ShapeError",
+    "Trajectory",
+    "__version__",
+    "build_policy",
+    "design_policy",
+    "episode_seed",
+    "load_plant",
+    "register_envs",
+    "run_episodes",
+]
 
 
 def __getattr__(name: str) -> Any:
-    if name == "PolicyContext":          # the plugin API, loaded on first use
-        from pendulum_lqg.plugins import PolicyContext
+    if name == "ENV_ID":                 # reading the id registers it: gym.make(pendulum_lqg.ENV_ID)
+        from pendulum_lqg.envs.registration import ENV_ID
 
-        return PolicyContext
+        register_envs()
+        return ENV_ID
+    if name in LAZY:
+        return getattr(importlib.import_module(LAZY[name]), name)
     raise AttributeError(f"module 'pendulum_lqg' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})
 
 
 def _headless_gl_default() -> None:
@@ -90,8 +130,7 @@ def _headless_gl_default() -> None:
 
 _headless_gl_default()
 
-#: The ``pendulum-lqg`` console script: its process needs no Gymnasium registration.
-_CLI_PROCESS = PurePath(sys.argv[0]).name == "pendulum-lqg" if sys.argv else False
-
-if not _CLI_PROCESS:
+# A program that imported Gymnasium first (``gym.make("pendulum_lqg:…")`` does) finds the id
+# registered, as with any Gymnasium environment package; registering then costs nothing more.
+if "gymnasium" in sys.modules:
     register_envs()

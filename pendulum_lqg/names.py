@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 CONTROLLERS: tuple[str, ...] = ("lqr", "dlqr")
-#: Observers: ``none`` (true state) and the estimators of :mod:`pendulum_lqg.policy`.
+#: Observers: ``none`` (true state) and the estimators of :mod:`pendulum_lqg.policies.lqg`.
 OBSERVERS: tuple[str, ...] = ("none", "luenberger", "kalman", "kalman-predictor", "kalman-tv",
                               "kalman-bucy", "reduced-order", "ackermann", "lmi", "h2", "hinf",
                               "kalman-delay", "luenberger-euler", "kalman-bucy-euler")
@@ -14,3 +14,5 @@ PLANTS: tuple[str, ...] = ("mujoco", "linear-zoh", "linear-euler")
 #: ``pendulum-lqg theory``.
 LECTURE_POLICIES: tuple[str, ...] = ("dlqr+none", "dlqr+luenberger", "dlqr+kalman",
                                      "dlqr+kalman-tv", "lqr+kalman-bucy")
+#: What an environment observes: the measurement ``y`` (the benchmark) or the true state.
+OBSERVATION_MODES: tuple[str, ...] = ("measurement", "state")

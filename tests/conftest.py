@@ -13,7 +13,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import pytest
 
-from pendulum_lqg.plant import load_plant
+from pendulum_lqg.model.plant import load_plant
 
 
 @pytest.fixture(scope="session")

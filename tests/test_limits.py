@@ -8,12 +8,12 @@ import os
 
 import pytest
 
-from pendulum_lqg import limits
 from pendulum_lqg.cli import main
 from pendulum_lqg.core.loop import Simulator
 from pendulum_lqg.core.physics import _cpu_count
 from pendulum_lqg.core.scenario import Scenario
-from pendulum_lqg.plant import load_plant
+from pendulum_lqg.model.plant import load_plant
+from pendulum_lqg.util import limits
 
 
 def _one_line_exit_2(capsys, argv, fragment):

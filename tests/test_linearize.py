@@ -7,14 +7,14 @@ import pytest
 
 from pendulum_lqg import design
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.linearize import (
+from pendulum_lqg.model.linearize import (
     analytic_linearization,
     discretize_transition,
     discretize_zoh,
     linearize,
     steps_per_period,
 )
-from pendulum_lqg.plant import ModelOverrides, load_plant
+from pendulum_lqg.model.plant import ModelOverrides, load_plant
 
 
 def _rel(a, b):

@@ -1,4 +1,4 @@
-"""Plants given as matrices (pendulum_lqg.lti): the experiments' files, their designs against the
+"""Plants given as matrices (pendulum_lqg.model.lti): the experiments' files, their designs against the
 documents' numbers, the theory, and one-line errors."""
 
 from __future__ import annotations
@@ -11,7 +11,8 @@ import pytest
 
 from pendulum_lqg.cli import main
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.lti import design_lti_policy, load_lti, lti_from_mapping, lti_theory
+from pendulum_lqg.model.lti import load_lti, lti_from_mapping
+from pendulum_lqg.policies.lti import design_lti_policy, lti_theory
 
 EXPERIMENTS = Path(__file__).resolve().parents[1] / "experiments" / "lti"
 
@@ -103,7 +104,7 @@ def test_run_cli_on_the_double_integrator_gives_run_episodes_rows(capsys):
 
     from pendulum_lqg.cli.parser import jsonable
     from pendulum_lqg.core.runner import run_episodes
-    from pendulum_lqg.lti import lti_scenario
+    from pendulum_lqg.policies.lti import lti_scenario
 
     path = EXPERIMENTS / "double_integrator.toml"
     assert main(["run", "--lti", str(path), "--episodes", "4", "--duration", "3",
@@ -143,8 +144,8 @@ def test_bench_on_an_lti_experiment(tmp_path):
 
     from pendulum_lqg.bench.experiments import load_spec
     from pendulum_lqg.core.runner import run_episodes
-    from pendulum_lqg.files import read_csv
-    from pendulum_lqg.lti import lti_scenario
+    from pendulum_lqg.policies.lti import lti_scenario
+    from pendulum_lqg.util.files import read_csv
 
     out = tmp_path / "di"
     assert main(["bench", "double_integrator", "--episodes", "3", "--out", str(out),

@@ -33,7 +33,7 @@ _XML = MODEL.read_text()
     ("</mujoco>", "", "cannot parse"),
 ])
 def test_models_that_break_the_contract_are_refused(tmp_path, capsys, old, new, message):
-    from pendulum_lqg.plant import load_plant
+    from pendulum_lqg.model.plant import load_plant
 
     assert _XML.count(old) == 1
     path = tmp_path / "edited.xml"
@@ -60,7 +60,7 @@ def test_models_that_break_the_contract_are_refused(tmp_path, capsys, old, new, 
 ])
 def test_a_bad_timestep_or_gravity_is_one_line_naming_the_file(tmp_path, capsys, old, new,
                                                                 message):
-    from pendulum_lqg.plant import load_plant
+    from pendulum_lqg.model.plant import load_plant
 
     assert _XML.count(old) == 1
     path = tmp_path / "options.xml"

@@ -16,7 +16,7 @@ from pendulum_lqg.core.physics import thread_count
 from pendulum_lqg.core.runner import _shard_copy, run_episodes
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.errors import PendulumLQGError, PluginError
-from pendulum_lqg.plugins import build_policy, source_digest
+from pendulum_lqg.policies.loading import build_policy, source_digest
 
 #: A plug-in that pushes nothing; ``{setup}`` and ``{member}`` are where a case breaks it.
 TEMPLATE = '''

@@ -17,9 +17,9 @@ from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.errors import PluginError
-from pendulum_lqg.plant import load_plant
-from pendulum_lqg.plugins import PolicyContext, build_policy
-from pendulum_lqg.resources import data_dir
+from pendulum_lqg.model.plant import load_plant
+from pendulum_lqg.policies.loading import PolicyContext, build_policy
+from pendulum_lqg.util.resources import data_dir
 
 HERE = Path(__file__).parent
 PLUGINS = HERE / "plugins" / "lqg_plugins.py"
@@ -232,7 +232,7 @@ def test_a_model_whose_geoms_have_other_names_works_until_an_override_needs_them
     assert main(["run", "--model", str(path), "--episodes", "3", "--duration", "1", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["success_rate"] == 1.0
     from pendulum_lqg.errors import ConfigError
-    from pendulum_lqg.plant import ModelOverrides
+    from pendulum_lqg.model.plant import ModelOverrides
 
     with pytest.raises(ConfigError, match="the override pole_mass_scale needs a geom named 'pole'"):
         load_plant(path, overrides=ModelOverrides(pole_mass_scale=2.0))

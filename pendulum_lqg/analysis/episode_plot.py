@@ -35,7 +35,7 @@ if TYPE_CHECKING:
 
     from pendulum_lqg.core.scenario import Scenario
     from pendulum_lqg.core.trajectory import Trajectory
-    from pendulum_lqg.plant import Plant
+    from pendulum_lqg.model.plant import Plant
 
 #: Panel labels of the cart-pole's state ``[p, θ, ṗ, θ̇]`` (units in brackets).
 STATE_LABELS = ("p [m]", "θ [rad]", "ṗ [m/s]", "θ̇ [rad/s]")
@@ -137,9 +137,9 @@ def save_episode_plot(fig: Figure, path: str | Path) -> Path:
 
 def check_plot_path(path: str | Path) -> Path:
     """``path`` checked before anything runs: a known suffix, and a target that
-    :func:`~pendulum_lqg.files.output_file` accepts (a new path or a regular file, never a device,
+    :func:`~pendulum_lqg.util.files.output_file` accepts (a new path or a regular file, never a device,
     a FIFO or a folder; its folder created and writable)."""
-    from pendulum_lqg.files import output_file
+    from pendulum_lqg.util.files import output_file
 
     if Path(path).suffix.lower() not in PLOT_SUFFIXES:
         raise ConfigError(f"--plot: expected a file name ending in {', '.join(PLOT_SUFFIXES)}, got "

@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from pendulum_lqg.design import kalman
-from pendulum_lqg.design._checks import as_loop, as_matrix
+from pendulum_lqg.design.checks import as_loop, as_matrix
 from pendulum_lqg.errors import ConfigError
 
 

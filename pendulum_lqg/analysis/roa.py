@@ -28,7 +28,7 @@ from pendulum_lqg.core.protocol import PolicyProtocol
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.plant import Plant
+from pendulum_lqg.model.plant import Plant
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ An experiment file describes a grid::
     [noise]                 # fixed NoiseModel fields (see pendulum_lqg.core.noise.NoiseModel)
     process = "state"
 
-    [design]                # fixed DesignSpec fields (see pendulum_lqg.policy.DesignSpec)
+    [design]                # fixed DesignSpec fields (see pendulum_lqg.policies.lqg.DesignSpec)
     R = 1.0
 
     model_file = "my_cartpole.xml"   # optional: your own cart-pole MJCF (default the shipped one)
@@ -59,11 +59,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from pendulum_lqg._config import check_keys
+from pendulum_lqg.bench.study_params import parse_study_params
+from pendulum_lqg.core import defaults
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.plant import ModelOverrides, Plant
-from pendulum_lqg.policy import CONTROLLERS, OBSERVERS, DesignSpec
+from pendulum_lqg.model.plant import ModelOverrides, Plant
+from pendulum_lqg.names import CONTROLLERS, OBSERVERS
+from pendulum_lqg.policies.spec import DesignSpec
+from pendulum_lqg.util.config import check_keys
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
@@ -122,7 +125,7 @@ class Configuration:
     plugin: str | None = None
     #: the cart-pole MJCF (absolute path) instead of the shipped ``cartpole.xml``
     model_file: str | None = None
-    #: SHA-256 of the plugin's source (:func:`~pendulum_lqg.plugins.source_digest`), read when
+    #: SHA-256 of the plugin's source (:func:`~pendulum_lqg.policies.loading.source_digest`), read when
     #: the configuration is made (the experiment is parsed, right after the plugin was imported);
     #: a unit refuses to run on another source, and its record keeps it
     plugin_source: str | None = None
@@ -132,7 +135,7 @@ class Configuration:
 
     def __post_init__(self) -> None:
         if self.plugin is not None and self.plugin_source is None:
-            from pendulum_lqg.plugins import source_digest
+            from pendulum_lqg.policies.loading import source_digest
 
             object.__setattr__(self, "plugin_source", source_digest(self.plugin))
 
@@ -161,7 +164,7 @@ class Configuration:
         """``(nominal, simulated)``: the model the designs believe in (the XML as it is) and the
         one simulated (with the scenario's mismatch overrides; the same object when there are
         none)."""
-        from pendulum_lqg.plant import load_plant
+        from pendulum_lqg.model.plant import load_plant
 
         if self.lti_file is not None:
             from pendulum_lqg.bench.lti import lti_plant
@@ -180,8 +183,8 @@ class Configuration:
         """Build the configuration, check it against the (possibly overridden) model and design
         its built-in policy (once per distinct design), so that a design that fails — a Kalman
         filter on a singular ``measurement_variance``, say — stops the parse, not the sweep."""
-        from pendulum_lqg.plant import steps_per_period
-        from pendulum_lqg.policy import delay_periods
+        from pendulum_lqg.model.plant import steps_per_period
+        from pendulum_lqg.policies.lqg import delay_periods
 
         scenario, spec = self.build()       # the Scenario checks the duration ceiling
         if self.lti_file is not None:
@@ -202,7 +205,7 @@ class Configuration:
 def _simulated_plant(model_file: str | None, overrides: ModelOverrides) -> Plant:
     """The plant a configuration simulates, compiled once per (file, overrides) while a grid is
     validated (a grid over noise or policies shares one model)."""
-    from pendulum_lqg.plant import load_plant
+    from pendulum_lqg.model.plant import load_plant
 
     return load_plant(model_file, overrides=overrides)
 
@@ -212,7 +215,7 @@ def _designed(model_file: str | None, control_period: float, noise: NoiseModel,
               spec: DesignSpec, delays: tuple[int, int]) -> None:
     """Design a configuration's built-in policy on the nominal plant (the design ignores the
     noise scale; a grid over noise, model scales or policies repeats few designs)."""
-    from pendulum_lqg.policy import design_policy
+    from pendulum_lqg.policies.lqg import design_policy
 
     design_policy(_simulated_plant(model_file, ModelOverrides()), control_period, noise, spec,
                   delays=delays)
@@ -330,8 +333,8 @@ def _overridden(data: dict[str, Any], episodes: int | None, seed: int | None,
 
 
 def check_rows(episodes: int, configurations: int) -> None:
-    """The ceiling of an experiment's rows (:data:`~pendulum_lqg.limits.MAX_BENCH_ROWS`)."""
-    from pendulum_lqg.limits import MAX_BENCH_ROWS, check_at_most
+    """The ceiling of an experiment's rows (:data:`~pendulum_lqg.util.limits.MAX_BENCH_ROWS`)."""
+    from pendulum_lqg.util.limits import MAX_BENCH_ROWS, check_at_most
 
     check_at_most("episodes × configurations", episodes * configurations, MAX_BENCH_ROWS,
                   "the summary holds every row of the experiment in memory")
@@ -347,7 +350,7 @@ def _grid_point(values: dict[str, Any], base: dict[str, dict[str, Any]],
                 base_dir: Path | None = None,
                 ) -> tuple[dict[str, dict[str, Any]], str | None]:
     """The resolved tables of one grid point, and its plugin reference (``None``: built-in)."""
-    from pendulum_lqg.plugins import is_plugin_ref, load_factory, resolve_ref, split_builtin
+    from pendulum_lqg.policies.loading import is_plugin_ref, load_factory, resolve_ref, split_builtin
 
     tables = {k: dict(v) for k, v in base.items()}
     plugin = None
@@ -379,7 +382,7 @@ def _grid_point(values: dict[str, Any], base: dict[str, dict[str, Any]],
                                   f"{kind!r}")
             tables["scenario"][f"{kind}_delay"] = value
         elif key == "theta0":
-            x0 = list(tables["scenario"].get("x0", (0.0, 0.1, 0.0, 0.0)))
+            x0 = list(tables["scenario"].get("x0", defaults.X0))
             x0[1] = value
             tables["scenario"]["x0"] = x0
         else:  # model scales
@@ -462,8 +465,6 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     if study is not None:
         if study not in STUDIES:
             raise ConfigError(f"study: unknown {study!r}; expected one of " + ", ".join(STUDIES))
-        from pendulum_lqg.analysis.studies import parse_study_params
-
         study_params = parse_study_params(str(study), data.get(str(study), {}))
     for other in STUDIES:
         if other in data and other != study:
@@ -478,7 +479,7 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     seed = _as_int("seed", data.get("seed", 0), 0)
     chunk = _as_int("chunk", data.get("chunk", 250), 1)
     keys = list(grid)
-    from pendulum_lqg.limits import MAX_CONFIGURATIONS, check_at_most
+    from pendulum_lqg.util.limits import MAX_CONFIGURATIONS, check_at_most
 
     n_configs = math.prod(len(grid[k]) for k in keys)
     check_at_most("grid", n_configs, MAX_CONFIGURATIONS,
@@ -514,7 +515,7 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
     :meth:`ExperimentSpec.with_overrides`, but the file is validated once, with them).
     """
     from pendulum_lqg.boundary import read_toml
-    from pendulum_lqg.resources import experiment_names, experiment_path
+    from pendulum_lqg.util.resources import experiment_names, experiment_path
 
     path = Path(name_or_path)
     if not path.suffix and len(path.parts) == 1:
@@ -537,7 +538,7 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
 def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, Any]]:
     """Run one work unit; rows carry the configuration's grid values and index."""
     from pendulum_lqg.core.runner import run_episodes
-    from pendulum_lqg.plugins import build_policy, check_source
+    from pendulum_lqg.policies.loading import build_policy, check_source
 
     scenario, spec = unit.config.build()
     nominal, simulated = unit.config.plants(scenario)

@@ -1,6 +1,6 @@
 """Experiments on a plant given as matrices: ``lti_file = "lti/double_integrator.toml"``.
 
-An experiment file that names an LTI plant file (:mod:`pendulum_lqg.lti`, relative to the
+An experiment file that names an LTI plant file (:mod:`pendulum_lqg.model.lti`, relative to the
 experiment's folder) runs its grid on that plant instead of the cart-pole, through the same loop
 (:mod:`pendulum_lqg.core.layout`): the file gives the period, the initial state, the noise, the
 cost weights and the limits; the experiment chooses what a scenario chooses beside them::
@@ -65,7 +65,7 @@ def check_lti_experiment(data: dict[str, Any]) -> None:
             if key not in known:
                 raise ConfigError(f"{table}.{key}: not with lti_file (the LTI file holds it); "
                                   f"[{table}] takes " + (", ".join(known) or "nothing"))
-    from pendulum_lqg.plugins import is_plugin_ref
+    from pendulum_lqg.policies.loading import is_plugin_ref
 
     for key in data.get("grid", {}):
         if key not in LTI_GRID_KEYS:
@@ -81,15 +81,15 @@ def check_lti_experiment(data: dict[str, Any]) -> None:
 @functools.lru_cache(maxsize=16)
 def lti_plant(path: str) -> Any:
     """The plant of an experiment's ``lti_file`` (read once per path while a grid runs)."""
-    from pendulum_lqg.lti import load_lti
+    from pendulum_lqg.model.lti import load_lti
 
     return load_lti(path)
 
 
 def lti_build(cfg: Any) -> tuple[Any, Any]:
     """``(Scenario, DesignSpec)`` of a configuration on an LTI plant."""
-    from pendulum_lqg.lti import lti_scenario
-    from pendulum_lqg.policy import DesignSpec
+    from pendulum_lqg.policies.lqg import DesignSpec
+    from pendulum_lqg.policies.lti import lti_scenario
 
     fields = dict(cfg.scenario)
     scenario = lti_scenario(lti_plant(cfg.lti_file), noise_scale=cfg.noise.get("scale", 1.0),
@@ -101,7 +101,7 @@ def lti_policy(cfg: Any, scenario: Any, spec: Any) -> Any:
     """The configuration's built-in policy designed on its LTI plant, saturating to the limit in
     force."""
     from pendulum_lqg.core.rules import limits
-    from pendulum_lqg.lti import design_lti_policy
+    from pendulum_lqg.policies.lti import design_lti_policy
 
     plant = lti_plant(cfg.lti_file)
     return design_lti_policy(plant, f"{spec.controller}+{spec.observer}",
@@ -119,9 +119,9 @@ def lti_fields(cfg: Any) -> tuple[str, ...]:
 
 def lti_theory_entry(cfg: Any) -> dict[str, Any] | None:
     """The summary's ``theory`` entry of a configuration on an LTI plant: the stationary loop
-    (:func:`pendulum_lqg.lti.lti_theory`) in the Monte Carlo's column names; ``None`` with
+    (:func:`pendulum_lqg.policies.lti.lti_theory`) in the Monte Carlo's column names; ``None`` with
     delays or dropout (the theory does not model them)."""
-    from pendulum_lqg.lti import lti_theory
+    from pendulum_lqg.policies.lti import lti_theory
 
     scenario, spec = lti_build(cfg)
     if scenario.measurement_delay or scenario.actuator_delay or scenario.dropout:

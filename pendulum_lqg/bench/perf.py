@@ -44,8 +44,8 @@ from mujoco import rollout as mj_rollout
 from pendulum_lqg.core.physics import thread_count
 from pendulum_lqg.core.runner import run_episodes, shard_count
 from pendulum_lqg.core.scenario import Scenario
-from pendulum_lqg.plant import load_plant, steps_per_period
-from pendulum_lqg.policy import DesignSpec, design_policy
+from pendulum_lqg.model.plant import load_plant, steps_per_period
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
 #: Fewest physics steps a rollout chunk (one thread-pool task) should hold: smaller chunks cost
 #: more in hand-offs than they win in load balance (measured with 64 and 1024 rows).
@@ -159,7 +159,7 @@ def _count(name: str, value: object) -> int:
 def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None = None,
              repeats: int = 5, memory: bool = False,
              log: Callable[[str], None] = lambda s: None) -> dict[str, Any]:
-    from pendulum_lqg.limits import (
+    from pendulum_lqg.util.limits import (
         MAX_PERF_REPEATS,
         MAX_PERF_STEPS,
         MAX_RUN_EPISODES,

@@ -19,7 +19,7 @@ Layout of a results folder::
     meta.json        timestamps and machine facts (kept apart so the data files are byte-identical
                      for the same seed)
     .lock            present while a run writes into the folder (an flock on it, which the system
-                     drops when the run ends however it ends; :class:`~pendulum_lqg.files.FileLock`)
+                     drops when the run ends however it ends; :class:`~pendulum_lqg.util.files.FileLock`)
 """
 
 from __future__ import annotations
@@ -30,39 +30,22 @@ import json
 import shutil
 import time
 from collections.abc import Callable
-from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from pendulum_lqg import SCHEMA_VERSION, __version__
 from pendulum_lqg.bench.experiments import check_name
 from pendulum_lqg.boundary import read_bytes
 from pendulum_lqg.boundary.schemas import unit_record
 from pendulum_lqg.core.metrics import EPISODE_FIELDS, summarize, summary_metrics
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.files import FileLock, atomic_write, read_csv, rows_to_csv
+from pendulum_lqg.util.files import FileLock, atomic_write, read_csv, rows_to_csv
+from pendulum_lqg.version import SCHEMA_VERSION, versions
 
 if TYPE_CHECKING:
     from pendulum_lqg.bench.experiments import Configuration, ExperimentSpec, WorkUnit
 
 __all__ = ["ResultsDir", "atomic_write", "check_name", "markdown_table", "read_csv",
            "rows_to_csv", "summarize_configs", "unit_columns", "versions"]
-
-#: Libraries whose versions change the numbers; a resume across a change of any is refused.
-VERSIONED = ("mujoco", "numpy", "scipy", "control")
-
-
-def versions() -> dict[str, str]:
-    """pendulum_lqg's version and those of :data:`VERSIONED` (read from package metadata, nothing
-    imported)."""
-    out = {"pendulum_lqg": __version__}
-    for lib in VERSIONED:
-        try:
-            out[lib] = metadata.version(lib)
-        except metadata.PackageNotFoundError:
-            out[lib] = "absent"
-    return out
-
 
 def _protected(path: Path) -> str | None:
     """Why ``--force`` must never empty ``path`` (``None`` if it may): the current folder or one
@@ -322,12 +305,12 @@ def summarize_configs(spec: ExperimentSpec, rows: list[dict[str, Any]]) -> dict[
 
 
 def config_theory(cfg: Configuration) -> dict[str, Any] | None:
-    """The closed-form stationary loop of a configuration (:func:`~pendulum_lqg.analysis.theory.
+    """The closed-form stationary loop of a configuration (:func:`~pendulum_lqg.policies.theory.
     policy_theory`, on the linearisation of the simulated plant: its own linear plant, or the
     exact ZOH for MuJoCo), as the summary's ``theory`` entry; ``None`` for what the theory does
     not model (plugins, delays, dropout, lags, force noise, randomised plants)."""
-    from pendulum_lqg.analysis.theory import policy_theory
-    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.policies.loading import build_policy
+    from pendulum_lqg.policies.theory import policy_theory
 
     if cfg.plugin is not None:
         return None

@@ -201,7 +201,7 @@ def _with_progress(outcomes: Iterable[Outcome], todo: list[WorkUnit], total: int
                     + (f" {status}" if status else ""))
             yield unit, rows, error
         return
-    from pendulum_lqg.progress import Progress
+    from pendulum_lqg.util.progress import Progress
 
     with Progress("work units", total, done=already, enabled=True) as bar:
         for unit, rows, error in outcomes:
@@ -232,7 +232,7 @@ def record_telling_episodes(spec: ExperimentSpec, out: ResultsDir, record_dir: P
     import dataclasses
 
     from pendulum_lqg.core.runner import run_episodes
-    from pendulum_lqg.plugins import build_policy, check_source
+    from pendulum_lqg.policies.loading import build_policy, check_source
     from pendulum_lqg.record import record_episodes, telling_episodes
 
     record_dir.mkdir(parents=True, exist_ok=True)

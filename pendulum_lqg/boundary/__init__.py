@@ -3,8 +3,8 @@
 =============  ================================================================================
 module         concept
 =============  ================================================================================
-(this one)     reading: only regular files, at most :data:`~pendulum_lqg.limits.MAX_INPUT_BYTES`,
-               UTF-8, JSON or TOML nested at most :data:`~pendulum_lqg.limits.MAX_NESTING` deep
+(this one)     reading: only regular files, at most :data:`~pendulum_lqg.util.limits.MAX_INPUT_BYTES`,
+               UTF-8, JSON or TOML nested at most :data:`~pendulum_lqg.util.limits.MAX_NESTING` deep
 ``fields``     the validators of one value (a string, an integer ≥ k, a finite number, a table…)
                and :class:`~pendulum_lqg.boundary.fields.Where`, the file and key an error names
 ``schemas``    one schema per external format: score files, stable-baselines3 training records
@@ -26,21 +26,13 @@ from pathlib import Path
 from typing import Any
 
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.limits import MAX_INPUT_BYTES, MAX_NESTING
-
-_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
-          (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
-          (stat.S_ISSOCK, "a socket"))
-
-
-def file_kind(mode: int) -> str:
-    """What a file of ``st_mode`` ``mode`` is, for a message ("a FIFO (named pipe)")."""
-    return next((name for test, name in _KINDS if test(mode)), "not a regular file")
+from pendulum_lqg.util.files import file_kind
+from pendulum_lqg.util.limits import MAX_INPUT_BYTES, MAX_NESTING
 
 
 def read_bytes(path: str | os.PathLike[str], *, where: str) -> bytes:
     """The bytes of the regular file ``path``; anything else — missing, a folder, a FIFO, a
-    device, larger than :data:`~pendulum_lqg.limits.MAX_INPUT_BYTES` — is one
+    device, larger than :data:`~pendulum_lqg.util.limits.MAX_INPUT_BYTES` — is one
     :class:`ConfigError` line starting with ``where``."""
     p = Path(path)
     try:
@@ -92,7 +84,7 @@ def read_text(path: str | os.PathLike[str], *, where: str) -> str:
 
 
 def read_json(path: str | os.PathLike[str], *, where: str) -> Any:
-    """The JSON value of the file ``path``, nested at most :data:`~pendulum_lqg.limits.MAX_NESTING`
+    """The JSON value of the file ``path``, nested at most :data:`~pendulum_lqg.util.limits.MAX_NESTING`
     deep."""
     text = read_text(path, where=where)
     try:
@@ -107,7 +99,7 @@ def read_json(path: str | os.PathLike[str], *, where: str) -> Any:
 
 
 def read_toml(path: str | os.PathLike[str], *, where: str) -> dict[str, Any]:
-    """The TOML table of the file ``path``, nested at most :data:`~pendulum_lqg.limits.MAX_NESTING`
+    """The TOML table of the file ``path``, nested at most :data:`~pendulum_lqg.util.limits.MAX_NESTING`
     deep."""
     text = read_text(path, where=where)
     try:
@@ -127,7 +119,7 @@ def _too_deep(where: str, path: object) -> str:
 
 
 def check_nesting(data: Any, *, where: str, path: object) -> None:
-    """Tables and lists of ``data`` nest at most :data:`~pendulum_lqg.limits.MAX_NESTING` deep
+    """Tables and lists of ``data`` nest at most :data:`~pendulum_lqg.util.limits.MAX_NESTING` deep
     (walked without recursion)."""
     stack = [(data, 1)]
     while stack:

@@ -117,7 +117,7 @@ def _obs_norm(where: Where, data: Any) -> dict[str, Any] | None:
 def training_record(path: str | os.PathLike[str], *, where_text: str) -> dict[str, Any]:
     """The training record beside a stable-baselines3 model (``PATH.json``; format in
     :mod:`pendulum_lqg.scoreboard.sb3`)."""
-    from pendulum_lqg.envs.config import OBSERVATION_MODES
+    from pendulum_lqg.names import OBSERVATION_MODES
 
     data = read_json(path, where=where_text)
     where = Where(f"{where_text}: {path}")

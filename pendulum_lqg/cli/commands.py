@@ -12,12 +12,27 @@ from pendulum_lqg.cli.theory import limit_fields
 
 
 # ---- run -----------------------------------------------------------------------------------------
+def scenario_from_args(args: argparse.Namespace) -> Any:
+    """The :class:`~pendulum_lqg.core.scenario.Scenario` of ``run``'s options (the cart-pole)."""
+    from pendulum_lqg.core.scenario import Scenario
+    from pendulum_lqg.model.plant import Randomization
+
+    noise = noise_from_args(args, scale=args.noise_scale)
+    return Scenario(control_period=args.dt, duration=args.duration, noise=noise,
+                    x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0,
+                    plant=args.plant,
+                    measurement_delay=args.measurement_delay,
+                    actuator_delay=args.actuator_delay, dropout=args.dropout,
+                    actuator_tau=args.actuator_tau,
+                    randomize=Randomization.from_mapping(_randomize(args.randomize)),
+                    **limit_fields(args))
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from pendulum_lqg.core.metrics import summarize
-    from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.limits import MAX_RECORDED_EPISODES, MAX_RUN_EPISODES, check_at_most
-    from pendulum_lqg.plant import Randomization, load_plant
-    from pendulum_lqg.plugins import build_policy, is_plugin_ref, split_builtin
+    from pendulum_lqg.model.plant import load_plant
+    from pendulum_lqg.policies.loading import build_policy, is_plugin_ref, split_builtin
+    from pendulum_lqg.util.limits import MAX_RECORDED_EPISODES, MAX_RUN_EPISODES, check_at_most
 
     if args.policy is not None and (args.controller or args.observer):
         raise cfg_error("--policy: give either --policy or --controller/--observer, not both")
@@ -31,15 +46,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             lti_res = _run_in_batches(lti, lti_sc, lti_policy, args, trajectory=False)
         return lti_report(args, lti_config, lti_sc, lti_res.rows)
     plant = load_plant(args.model)
-    noise = noise_from_args(args, scale=args.noise_scale)
-    scenario = Scenario(control_period=args.dt, duration=args.duration, noise=noise,
-                        x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0,
-                        plant=args.plant,
-                        measurement_delay=args.measurement_delay,
-                        actuator_delay=args.actuator_delay, dropout=args.dropout,
-                        actuator_tau=args.actuator_tau,
-                        randomize=Randomization.from_mapping(_randomize(args.randomize)),
-                        **limit_fields(args))
+    scenario = scenario_from_args(args)
     plugin = is_plugin_ref(name)
     spec = spec_from_args(args, *(("dlqr", "kalman") if plugin else split_builtin(name)))
     policy = build_policy(name if plugin else None, plant=plant, scenario=scenario, spec=spec)
@@ -57,7 +64,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     config = {"policy": policy.name, "seed": args.seed, "episodes": args.episodes,
               "backend": args.backend, "scenario": scenario.to_dict(),
               "design": None if plugin else _dataclass_dict(spec), "model": str(plant.path)}
-    from pendulum_lqg import SCHEMA_VERSION
+    from pendulum_lqg.version import SCHEMA_VERSION
 
     out = {"schema_version": SCHEMA_VERSION, "config": config,
            "success_rate": summary["success_rate"],
@@ -85,7 +92,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 def _watchdog(args: argparse.Namespace) -> Any:
     """The watchdog of the plug-in's calls (``--call-timeout``)."""
-    from pendulum_lqg.watchdog import call_timeout
+    from pendulum_lqg.util.watchdog import call_timeout
 
     return call_timeout(args.call_timeout)
 
@@ -93,8 +100,8 @@ def _watchdog(args: argparse.Namespace) -> Any:
 def _check_recording_target(args: argparse.Namespace) -> None:
     """The recording's file, checked before any episode runs: not '' or a folder, and a new path
     or a regular file (never a device or a FIFO)."""
-    from pendulum_lqg.files import output_file
     from pendulum_lqg.record.writer import recording_path
+    from pendulum_lqg.util.files import output_file
 
     output_file("--record", recording_path(args.record if args.record is not None
                                            else DEFAULT_RECORDING), what="recording")
@@ -198,11 +205,11 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None
 def _run_in_batches(plant: Any, scenario: Any, policy: Any, args: argparse.Namespace, *,
                     trajectory: bool) -> Any:
     """``run_episodes`` over ``--episodes`` in batches (memory flat in the episode count; the rows
-    do not depend on the batching), with its progress on stderr (:mod:`pendulum_lqg.progress`)."""
-    from pendulum_lqg import limits
+    do not depend on the batching), with its progress on stderr (:mod:`pendulum_lqg.util.progress`)."""
     from pendulum_lqg.core.runner import BatchResult, run_episodes
-    from pendulum_lqg.plant import steps_per_period
-    from pendulum_lqg.progress import Progress
+    from pendulum_lqg.model.plant import steps_per_period
+    from pendulum_lqg.util import limits
+    from pendulum_lqg.util.progress import Progress
 
     steps = scenario.n_periods * steps_per_period(plant, scenario.control_period)
     size = max(1, min(limits.RUN_BATCH, 20_000_000 // max(steps, 1)))    # ≤ ~2·10⁷ physics steps each

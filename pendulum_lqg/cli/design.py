@@ -13,8 +13,8 @@ from pendulum_lqg.cli.parser import jsonable, noise_from_args, spec_from_args
 def cmd_design(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from pendulum_lqg.plant import load_plant
-    from pendulum_lqg.policy import design_all
+    from pendulum_lqg.model.plant import load_plant
+    from pendulum_lqg.policies.lqg import design_all
 
     plant = load_plant(args.model)
     noise = noise_from_args(args)

@@ -1,5 +1,5 @@
 """``pendulum-lqg run --lti FILE``: seeded episodes of a plant given as matrices
-(:mod:`pendulum_lqg.lti`) through the same loop as the cart-pole, summarised with the file's
+(:mod:`pendulum_lqg.model.lti`) through the same loop as the cart-pole, summarised with the file's
 state names."""
 
 from __future__ import annotations
@@ -12,15 +12,16 @@ from typing import Any, cast
 import numpy as np
 
 from pendulum_lqg.cli.parser import cfg_error, jsonable
+from pendulum_lqg.core import defaults
 
 #: Options of ``run`` that describe the cart-pole; with ``--lti`` the file says them instead
 #: (their value when not given, and what the file holds in their place).
-_CARTPOLE_ONLY = {"model": (None, "the file is the plant"), "theta0": (0.1, "the file's x0"),
+_CARTPOLE_ONLY = {"model": (None, "the file is the plant"), "theta0": (defaults.X0[1], "the file's x0"),
                   "q": (None, "the file's Q"), "r": (None, "the file's R"),
                   "w": (None, "the file's W"), "v": (None, "the file's V"),
                   "observer_poles": (None, "the file's observer_poles"),
                   "process_noise": ("state", "the file's G and W"),
-                  "theta_max": (0.5, "the file's state_limits"),
+                  "theta_max": (defaults.THETA_MAX, "the file's state_limits"),
                   "track_limit": (None, "the file's state_limits"),
                   "record": (None, "recordings draw the cart-pole"),
                   "spawn": (False, "recordings draw the cart-pole"),
@@ -39,8 +40,9 @@ def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, d
     scenario, the policy and the configuration to report; ``cmd_run`` runs them."""
     from pendulum_lqg.core.layout import layout
     from pendulum_lqg.core.rules import limits
-    from pendulum_lqg.limits import MAX_RUN_EPISODES, check_at_most
-    from pendulum_lqg.lti import design_lti_policy, load_lti, lti_scenario
+    from pendulum_lqg.model.lti import load_lti
+    from pendulum_lqg.policies.lti import design_lti_policy, lti_scenario
+    from pendulum_lqg.util.limits import MAX_RUN_EPISODES, check_at_most
 
     _check_options(args)
     plant = load_lti(args.lti)
@@ -70,8 +72,8 @@ def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, d
 def lti_report(args: argparse.Namespace, config: dict[str, Any], scenario: Any,
                rows: list[dict[str, Any]]) -> int:
     """Print the summary of ``run --lti``'s episode ``rows`` (``--json``: every row too)."""
-    from pendulum_lqg import SCHEMA_VERSION
     from pendulum_lqg.core.metrics import summarize, summary_metrics
+    from pendulum_lqg.version import SCHEMA_VERSION
 
     fields = tuple(rows[0])
     summary = summarize(rows, summary_metrics(fields))
@@ -91,7 +93,7 @@ def _limit(value: float) -> float | str:
 
 def _check_options(args: argparse.Namespace) -> None:
     """Refuse, one line each, the cart-pole's options given with ``--lti``."""
-    from pendulum_lqg.plugins import is_plugin_ref
+    from pendulum_lqg.policies.loading import is_plugin_ref
 
     if args.policy is not None and is_plugin_ref(args.policy):
         raise cfg_error("--policy: with --lti, a built-in 'controller+observer' (dlqr/lqr + "

@@ -10,10 +10,11 @@ import sys
 from collections.abc import Callable
 from typing import Any, NoReturn
 
-from pendulum_lqg import __version__
 from pendulum_lqg.cli.score import add_call_timeout
 from pendulum_lqg.cli.score import add_parsers as add_score_parsers
+from pendulum_lqg.core import defaults
 from pendulum_lqg.names import CONTROLLERS, LECTURE_POLICIES, OBSERVERS, PLANTS
+from pendulum_lqg.version import __version__
 
 EXIT_USAGE = 2
 
@@ -93,9 +94,9 @@ def _add_design_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("design")
     g.add_argument("--model", default=None, metavar="XML",
                    help="MJCF model file (default: the bundled models/cartpole.xml)")
-    g.add_argument("--dt", type=_number, default=0.01, metavar="T",
+    g.add_argument("--dt", type=_number, default=defaults.CONTROL_PERIOD, metavar="T",
                    help="control period T in seconds, a whole number (≤ 10 000) of the model's "
-                        "physics steps and at most 1 s (default 0.01)")
+                        f"physics steps and at most 1 s (default {defaults.CONTROL_PERIOD:g})")
     g.add_argument("--q", type=_floats, default=None, metavar="Q1,..,Q4",
                    help="diagonal of the LQR state weight Q, units of [m⁻², rad⁻², (m/s)⁻², "
                         "(rad/s)⁻²] (default 1,1,1,1)")
@@ -130,8 +131,8 @@ def _limit(text: str) -> float:
 def add_limit_options(p: argparse.ArgumentParser) -> None:
     """``--theta-max``, ``--track-limit``, ``--force-limit`` (``inf`` switches one off)."""
     g = p.add_argument_group("limits (inf switches a limit off; core/rules.py applies them)")
-    g.add_argument("--theta-max", type=_limit, default=0.5, metavar="RAD",
-                   help="failure when |θ| exceeds this, in rad (default 0.5)")
+    g.add_argument("--theta-max", type=_limit, default=defaults.THETA_MAX, metavar="RAD",
+                   help=f"failure when |θ| exceeds this, in rad (default {defaults.THETA_MAX:g})")
     g.add_argument("--track-limit", type=_limit, default=None, metavar="M",
                    help="failure when |p| reaches this, in m (default: the MJCF slider range, "
                         "±2.4 m; beyond it only on a linear plant)")
@@ -163,8 +164,8 @@ def add_theory_parser(sub: Any) -> None:
                         "dlqr+none, dlqr+kalman, dlqr+luenberger)")
     p.add_argument("--noise-scale", type=_number, default=1.0,
                    help="multiplies both noises' standard deviations (default 1)")
-    p.add_argument("--duration", type=_number, default=10.0,
-                   help="episode length in s for the implied J (default 10)")
+    p.add_argument("--duration", type=_number, default=defaults.DURATION,
+                   help=f"episode length in s for the implied J (default {defaults.DURATION:g})")
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: policies.NAME.{spectral_radius, stable, std, "
                         "u_std, estimate_error_std, cost_rate, …}")
@@ -203,13 +204,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="number of episodes (default 100)")
     p.add_argument("--seed", type=_nonneg_int, default=0,
                    help="the run's seed; episode k draws from episode_seed(seed, k) (default 0)")
-    p.add_argument("--duration", type=_number, default=10.0,
-                   help="episode length in s, at most 10⁸ control periods (default 10)")
+    p.add_argument("--duration", type=_number, default=defaults.DURATION,
+                   help=f"episode length in s, at most 10⁸ control periods (default "
+                        f"{defaults.DURATION:g})")
     p.add_argument("--noise-scale", type=_number, default=1.0,
                    help="multiplies both noises' standard deviations (0 = noise-free; default 1); "
                         "the estimators stay designed for the nominal noise")
-    p.add_argument("--theta0", type=_number, default=0.1,
-                   help="initial pole angle in rad, e.g. --theta0 -0.1 (default 0.1)")
+    p.add_argument("--theta0", type=_number, default=defaults.X0[1],
+                   help=f"initial pole angle in rad, e.g. --theta0 -0.1 (default {defaults.X0[1]:g})")
     p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
                    help="initial estimate: x̂₀ = 0 or the true x₀ (default zero)")
     p.add_argument("--plant", choices=PLANTS, default="mujoco",
@@ -335,7 +337,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 # ---- helpers -------------------------------------------------------------------------------------
 def jsonable(obj: Any) -> Any:
-    from pendulum_lqg.jsonio import plain
+    from pendulum_lqg.util.jsonio import plain
 
     return plain(obj)
 
@@ -362,7 +364,7 @@ def cfg_error(msg: str) -> Exception:
 def spec_from_args(args: argparse.Namespace, controller: str = "dlqr", observer: str = "kalman",
                     ) -> Any:
     """The built-in designs' options (weights, observer poles) from the command line."""
-    from pendulum_lqg.policy import DesignSpec
+    from pendulum_lqg.policies.lqg import DesignSpec
 
     kw: dict[str, Any] = {"controller": controller, "observer": observer}
     if args.q is not None:

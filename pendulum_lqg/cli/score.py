@@ -81,7 +81,7 @@ def _noise_scale(text: str) -> float:
 
 
 def add_call_timeout(p: argparse.ArgumentParser) -> None:
-    """``--call-timeout S``: the watchdog of user code (:mod:`pendulum_lqg.watchdog`)."""
+    """``--call-timeout S``: the watchdog of user code (:mod:`pendulum_lqg.util.watchdog`)."""
     p.add_argument("--call-timeout", type=_seconds, default=None, metavar="S",
                    help="stop the run, naming the call, when one call into a plug-in or agent "
                         "(factory, reset, act) has not returned after S seconds; 0: never "
@@ -89,11 +89,11 @@ def add_call_timeout(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_score(args: argparse.Namespace) -> int:
-    from pendulum_lqg.files import atomic_write, output_file
-    from pendulum_lqg.progress import Progress
     from pendulum_lqg.scoreboard.score import score_entry
     from pendulum_lqg.scoreboard.suites import load_suite, suite_names
-    from pendulum_lqg.watchdog import call_timeout
+    from pendulum_lqg.util.files import atomic_write, output_file
+    from pendulum_lqg.util.progress import Progress
+    from pendulum_lqg.util.watchdog import call_timeout
 
     out = None if args.out is None else output_file("--out", args.out, what="score (JSON)")
     wanted = args.suite or ["all"]
@@ -139,8 +139,8 @@ def _print_score(doc: dict[str, Any]) -> None:
 
 
 def cmd_board(args: argparse.Namespace) -> int:
-    from pendulum_lqg.files import atomic_write, output_file
     from pendulum_lqg.scoreboard.board import make_board
+    from pendulum_lqg.util.files import atomic_write, output_file
 
     out = None if args.out is None else output_file("--out", args.out, what="board (Markdown)")
     table = make_board(Path(args.dir), warn=lambda line: print(line, file=sys.stderr))

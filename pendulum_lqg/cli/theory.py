@@ -1,5 +1,5 @@
 """``pendulum-lqg theory``: the stationary closed loop of built-in linear policies, in closed form
-(:mod:`pendulum_lqg.analysis.theory`); the Scenario fields of the limit options ``run`` shares
+(:mod:`pendulum_lqg.policies.theory`); the Scenario fields of the limit options ``run`` shares
 (the grammar of both is in :mod:`pendulum_lqg.cli.parser`)."""
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ def limit_fields(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def cmd_theory(args: argparse.Namespace) -> int:
-    from pendulum_lqg.analysis.theory import lecture_theory
     from pendulum_lqg.cli.parser import jsonable, noise_from_args, spec_from_args
     from pendulum_lqg.core.scenario import Scenario
+    from pendulum_lqg.model.plant import load_plant
     from pendulum_lqg.names import LECTURE_POLICIES
-    from pendulum_lqg.plant import load_plant
+    from pendulum_lqg.policies.theory import lecture_theory
 
     if args.lti is not None:
         return _lti_theory(args)
@@ -45,7 +45,8 @@ def cmd_theory(args: argparse.Namespace) -> int:
 def _lti_theory(args: argparse.Namespace) -> int:
     """``theory --lti FILE``: the built-in policies on a plant given as matrices."""
     from pendulum_lqg.cli.parser import jsonable
-    from pendulum_lqg.lti import load_lti, lti_theory
+    from pendulum_lqg.model.lti import load_lti
+    from pendulum_lqg.policies.lti import lti_theory
 
     plant = load_lti(args.lti)
     names = tuple(args.policies) or ("dlqr+none", "dlqr+kalman", "dlqr+luenberger")

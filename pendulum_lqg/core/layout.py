@@ -2,11 +2,11 @@
 
 The one loop (:class:`~pendulum_lqg.core.loop.Simulator`) steps two kinds of plant:
 
-* the cart-pole (:class:`~pendulum_lqg.plant.Plant`, MuJoCo or its linearisation): the state
+* the cart-pole (:class:`~pendulum_lqg.model.plant.Plant`, MuJoCo or its linearisation): the state
   ``x = [p, θ, ṗ, θ̇]``, the measurement ``y = [p, θ]`` (the first two states), the scenario's
   initial state, noise densities and cost weights, and the failure rule of the pole's angle and the
   track (:func:`~pendulum_lqg.core.rules.detect_failure`);
-* a linear plant given as matrices (:class:`~pendulum_lqg.lti.LTIPlant`): ``n`` states and ``p``
+* a linear plant given as matrices (:class:`~pendulum_lqg.model.lti.LTIPlant`): ``n`` states and ``p``
   outputs named by its file, ``y = C x + v``, its own initial state, noise covariances (the
   state's jump over one period, ``Φ``-consistent, and V), diagonal cost weights and optional
   per-state failure limits; the scenario contributes the duration, the noise scale and the
@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.plant import OUTPUT_NAMES, STATE_NAMES
+from pendulum_lqg.model.plant import OUTPUT_NAMES, STATE_NAMES
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario

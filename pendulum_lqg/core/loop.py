@@ -16,7 +16,7 @@ of each running row:
    the per-episode metrics (:class:`~pendulum_lqg.core.metrics.MetricsAccumulator`).
 
 The plant is the cart-pole (MuJoCo or its linearisation) or a linear plant given as matrices
-(:mod:`pendulum_lqg.lti`): :mod:`~pendulum_lqg.core.layout` says what differs (the lengths and
+(:mod:`pendulum_lqg.model.lti`): :mod:`~pendulum_lqg.core.layout` says what differs (the lengths and
 names of x and y, ``y = C x``, the initial state, the noise covariances, the cost weights, the
 failure limits); the loop and its rules are the same.
 
@@ -42,7 +42,7 @@ from pendulum_lqg.core.physics import BACKENDS, Physics, make_physics, thread_co
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.sensing import SensingActuation
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.plant import Plant, steps_per_period
+from pendulum_lqg.model.plant import Plant, steps_per_period
 
 
 @dataclass
@@ -76,8 +76,8 @@ class Simulator:
 
     Parameters
     ----------
-    plant : the simulated plant: the cart-pole's :class:`~pendulum_lqg.plant.Plant` or an
-        :class:`~pendulum_lqg.lti.LTIPlant` (with ``scenario.plant = "linear-zoh"``)
+    plant : the simulated plant: the cart-pole's :class:`~pendulum_lqg.model.plant.Plant` or an
+        :class:`~pendulum_lqg.model.lti.LTIPlant` (with ``scenario.plant = "linear-zoh"``)
     scenario : timing, noise, initial state, failure rule and cost
     backend : ``"rollout"`` (``mujoco.batch`` over the batch, several threads) or ``"step"``
         (a plain ``mj_step`` loop); a scenario with a linear ``plant`` uses the linear backend

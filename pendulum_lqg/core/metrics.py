@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pendulum_lqg.core.rules import FAIL_NONE, FAIL_REASONS, period_integrals
-from pendulum_lqg.plant import STATE_NAMES
+from pendulum_lqg.model.plant import STATE_NAMES
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.layout import Layout

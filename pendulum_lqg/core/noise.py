@@ -32,8 +32,8 @@ from typing import Literal
 
 import numpy as np
 
-from pendulum_lqg._config import config_vector
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
+from pendulum_lqg.util.config import config_vector
 
 #: Control periods of noise drawn at once per episode.
 CHUNK_PERIODS = 256

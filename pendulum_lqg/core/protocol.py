@@ -18,8 +18,8 @@ The core saturates ``u`` after ``act`` (:func:`~pendulum_lqg.core.rules.saturate
 that models the plant should be fed the saturated force. Under dropouts or a measurement delay,
 rows of ``y`` are ``nan`` for samples that did not arrive.
 
-The factory of a plug-in, :class:`~pendulum_lqg.plugins.PolicyFactory`, lives beside the loader
-(it is called with a :class:`~pendulum_lqg.plugins.PolicyContext`).
+The factory of a plug-in, :class:`~pendulum_lqg.policies.loading.PolicyFactory`, lives beside the loader
+(it is called with a :class:`~pendulum_lqg.policies.loading.PolicyContext`).
 """
 
 from __future__ import annotations

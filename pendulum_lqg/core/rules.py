@@ -45,7 +45,7 @@ import numpy as np
 if TYPE_CHECKING:
     from pendulum_lqg.core.period import PeriodView
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.plant import Plant
+    from pendulum_lqg.model.plant import Plant
 
 #: Any state component beyond this magnitude counts as divergence.
 RUNAWAY = 1e6
@@ -65,7 +65,7 @@ def limits(plant: Plant, scenario: Scenario) -> tuple[float, float, float]:
     actuator ``ctrlrange``; any of them may be ``inf`` (the rule switched off). MuJoCo itself stops
     the cart at the slider's ``range`` and clips the force to ``ctrlrange``, so on the MuJoCo plant
     a larger limit would be a rule the physics never lets fire: it is refused (one line naming
-    the limit); the linear plants take any. An LTI plant (:mod:`pendulum_lqg.lti`) has no pole and
+    the limit); the linear plants take any. An LTI plant (:mod:`pendulum_lqg.model.lti`) has no pole and
     no track (``θ_max`` and the track are ``inf``: its own ``state_limits`` are the failure rule,
     :func:`detect_failure`) and its file's ``force_limit`` unless the scenario sets one.
     """

@@ -25,7 +25,7 @@ from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import episode_generators, episode_seeds
 from pendulum_lqg.core.trajectory import Trajectory, TrajectoryLog, estimator_snapshot
 from pendulum_lqg.errors import PendulumLQGError
-from pendulum_lqg.plant import Plant
+from pendulum_lqg.model.plant import Plant
 
 
 @dataclass

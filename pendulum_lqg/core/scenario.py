@@ -2,7 +2,7 @@
 
 A :class:`Scenario` is validated once, when it is made; the loop, the runner and the envs take it
 as it is. It holds no physical parameter of the plant — those live in the MJCF model
-(:mod:`pendulum_lqg.plant`) — only what the experiment chooses.
+(:mod:`pendulum_lqg.model.plant`) — only what the experiment chooses.
 """
 
 from __future__ import annotations
@@ -13,12 +13,13 @@ from typing import Literal
 
 import numpy as np
 
-from pendulum_lqg._config import config_vector, positive_limit, positive_number
+from pendulum_lqg.core import defaults
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.limits import MAX_DELAY_PERIODS, check_control_period, check_duration
+from pendulum_lqg.model.plant import ModelOverrides, Randomization
 from pendulum_lqg.names import PLANTS
-from pendulum_lqg.plant import ModelOverrides, Randomization
+from pendulum_lqg.util.config import config_vector, positive_limit, positive_number
+from pendulum_lqg.util.limits import MAX_DELAY_PERIODS, check_control_period, check_duration
 
 
 @dataclass(frozen=True)
@@ -60,22 +61,22 @@ class Scenario:
         rate: over physics step j the actuator applies the lag's exact response at the end of
         that step, ``f_j = u + (f_{j−1} − u)·e^{−h/τ}``
     randomize : per-episode parameter randomisation of the simulated plant
-        (:class:`~pendulum_lqg.plant.Randomization`; a mapping such as
+        (:class:`~pendulum_lqg.model.plant.Randomization`; a mapping such as
         ``{"pole_mass_scale": (0.8, 1.2)}`` is accepted)
     """
 
-    control_period: float = 0.01
-    duration: float = 10.0
+    control_period: float = defaults.CONTROL_PERIOD
+    duration: float = defaults.DURATION
     noise: NoiseModel = field(default_factory=NoiseModel.lecture)
-    x0: tuple[float, ...] = (0.0, 0.1, 0.0, 0.0)
-    x0_std: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)
+    x0: tuple[float, ...] = defaults.X0
+    x0_std: tuple[float, ...] = defaults.X0_STD
     estimate0: Literal["zero", "true"] = "zero"
-    theta_max: float = 0.5
+    theta_max: float = defaults.THETA_MAX
     track_limit: float | None = None
     force_limit: float | None = None
     settle_band: float = 0.02
-    cost_Q: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
-    cost_R: float = 1.0
+    cost_Q: tuple[float, ...] = defaults.COST_Q
+    cost_R: float = defaults.COST_R
     overrides: ModelOverrides = field(default_factory=ModelOverrides)
     plant: str = "mujoco"
     measurement_delay: float = 0.0

@@ -14,7 +14,7 @@ and emptied when a row (re)starts:
 * actuator lag τ: the first-order response ``f_j = u + (f_{j−1} − u)·e^{−h/τ}`` at the end of
   each physics step j, so the physics gets a force per step;
 * randomised models: each episode's simulated model from three uniforms of its child generator
-  (:class:`~pendulum_lqg.plant.Randomization`).
+  (:class:`~pendulum_lqg.model.plant.Randomization`).
 """
 
 from __future__ import annotations
@@ -26,12 +26,12 @@ import numpy as np
 
 from pendulum_lqg.core.noise import UniformStream
 from pendulum_lqg.core.seeding import child_generator
-from pendulum_lqg.plant import Randomization, load_plant
+from pendulum_lqg.model.plant import Randomization, load_plant
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.physics import Physics
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.plant import Plant
+    from pendulum_lqg.model.plant import Plant
 
 
 class SensingActuation:

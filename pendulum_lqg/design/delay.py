@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import as_matrix, as_square, design_function
+from pendulum_lqg.design.checks import as_matrix, as_square, design_function
 from pendulum_lqg.errors import ShapeError
 
 

@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import expm
 
-from pendulum_lqg.design._checks import as_matrix, as_positive, as_square, as_weight, design_function
+from pendulum_lqg.design.checks import as_matrix, as_positive, as_square, as_weight, design_function
 
 
 @design_function('A and dt')

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import solve_continuous_are, solve_discrete_are
 
-from pendulum_lqg.design._checks import (
+from pendulum_lqg.design.checks import (
     as_matrix,
     as_square,
     as_weight,

@@ -12,7 +12,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import as_loop, design_function
+from pendulum_lqg.design.checks import as_loop, design_function
 from pendulum_lqg.errors import DesignError
 
 

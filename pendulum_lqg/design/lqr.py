@@ -11,7 +11,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import (
+from pendulum_lqg.design.checks import (
     as_matrix,
     as_square,
     as_weight,
@@ -21,7 +21,7 @@ from pendulum_lqg.design._checks import (
     require_stable,
 )
 from pendulum_lqg.errors import DesignError
-from pendulum_lqg.limits import MAX_RICCATI_FLOATS, check_at_most
+from pendulum_lqg.util.limits import MAX_RICCATI_FLOATS, check_at_most
 
 
 @dataclass(frozen=True)
@@ -193,7 +193,7 @@ def finite_horizon_dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: Array
     ----------
     Phi : (n, n), Gamma : (n, m), Q : (n, n) PSD, R : (m, m) PD, S : (n, n) PSD terminal weight
     horizon : int ≥ 1, number of control steps N; at most
-        :data:`~pendulum_lqg.limits.MAX_RICCATI_FLOATS` ``// n² − 1`` (every ``P[n]`` is kept)
+        :data:`~pendulum_lqg.util.limits.MAX_RICCATI_FLOATS` ``// n² − 1`` (every ``P[n]`` is kept)
 
     Returns
     -------

@@ -8,7 +8,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import as_matrix, as_poles, as_positive, as_square, design_function
+from pendulum_lqg.design.checks import as_matrix, as_poles, as_positive, as_square, design_function
 from pendulum_lqg.errors import DesignError
 
 #: The project's default continuous-time observer poles (deliberately slow; see docs/theory.md §3.1).
@@ -31,7 +31,7 @@ class ObserverResult:
     form: str
 
 
-def _place(A: np.ndarray, C: np.ndarray, poles: np.ndarray, what: str) -> np.ndarray:
+def place_gain(A: np.ndarray, C: np.ndarray, poles: np.ndarray, what: str) -> np.ndarray:
     n = A.shape[0]
     obs = np.vstack([C @ np.linalg.matrix_power(A, k) for k in range(n)])
     if np.linalg.matrix_rank(obs) < n:
@@ -80,7 +80,7 @@ def luenberger(A: ArrayLike, C: ArrayLike, poles: ArrayLike) -> ObserverResult:
     n = A.shape[0]
     C = as_matrix("C", C, (None, n))
     poles = as_poles("poles", poles, n)
-    L = _place(A, C, poles, "(A, C)")
+    L = place_gain(A, C, poles, "(A, C)")
     return ObserverResult(L=L, poles=np.linalg.eigvals(A - L @ C), form="continuous")
 
 
@@ -115,10 +115,10 @@ def dluenberger(Phi: ArrayLike, C: ArrayLike, poles: ArrayLike, *,
     if dt is not None:
         poles = np.exp(poles * as_positive("dt", dt))
     if form == "predictor":
-        L = _place(Phi, C, poles, "(Phi, C)")
+        L = place_gain(Phi, C, poles, "(Phi, C)")
         achieved = np.linalg.eigvals(Phi - L @ C)
     elif form == "current":
-        L = _place(Phi, C @ Phi, poles, "(Phi, C·Phi)")
+        L = place_gain(Phi, C @ Phi, poles, "(Phi, C·Phi)")
         achieved = np.linalg.eigvals(Phi - L @ C @ Phi)
     else:
         raise DesignError(f"form: expected 'current' or 'predictor', got {form!r}")

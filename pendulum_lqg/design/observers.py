@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pendulum_lqg.design._checks import (
+from pendulum_lqg.design.checks import (
     as_matrix,
     as_poles,
     as_square,
@@ -30,7 +30,7 @@ from pendulum_lqg.design._checks import (
     design_function,
     require_detectable,
 )
-from pendulum_lqg.design.luenberger import ObserverResult, _place
+from pendulum_lqg.design.luenberger import ObserverResult, place_gain
 from pendulum_lqg.errors import DesignError, ShapeError
 
 #: Solver settings of the LMIs: Clarabel's tolerances (its defaults are 1e-8).
@@ -145,7 +145,7 @@ def _reduced(A: ArrayLike, B: ArrayLike, C: ArrayLike, poles: ArrayLike, form: s
     A11, A12, A21, A22 = Ab[:p, :p], Ab[:p, p:], Ab[p:, :p], Ab[p:, p:]
     B1, B2 = Bb[:p], Bb[p:]
     q = as_poles("poles", poles, n - p)
-    G = _place(A22, A12, q, "reduced-order observer: (A22, A12)")
+    G = place_gain(A22, A12, q, "reduced-order observer: (A22, A12)")
     F = A22 - G @ A12
     H_y = F @ G + A21 - G @ A11
     H_u = B2 - G @ B1

@@ -1,7 +1,7 @@
 """The LQG policy as a Gymnasium agent: ``reset()`` and ``act(observation) -> action``.
 
 :class:`LQGAgent` designs from the environment's own model and control period with
-:func:`~pendulum_lqg.policy.design_policy` — the very policy ``pendulum-lqg bench`` runs — and sees
+:func:`~pendulum_lqg.policies.lqg.design_policy` — the very policy ``pendulum-lqg bench`` runs — and sees
 nothing but the observations the env hands out. Over the same episode seeds
 (``env.reset(seed=episode_seed(s, k))``) it reproduces ``bench``'s episodes bit for bit (to rounding
 error with ``normalize_action=True``), so its success rate and mean J equal the benchmark's.
@@ -29,8 +29,8 @@ import numpy as np
 from pendulum_lqg.envs.single import CartPoleLQGEnv
 from pendulum_lqg.envs.vector import CartPoleLQGVectorEnv
 from pendulum_lqg.errors import ConfigError, ShapeError
-from pendulum_lqg.plant import load_plant
-from pendulum_lqg.policy import DesignSpec, Policy, delay_periods, design_policy
+from pendulum_lqg.model.plant import load_plant
+from pendulum_lqg.policies.lqg import DesignSpec, Policy, delay_periods, design_policy
 
 
 class LQGAgent:
@@ -39,7 +39,7 @@ class LQGAgent:
     Parameters
     ----------
     env : a ``pendulum_lqg/CartPoleLQG-v0`` env (wrapped or not) or its native vector env
-    spec : the design (controller, observer, weights); default :class:`~pendulum_lqg.policy.DesignSpec`
+    spec : the design (controller, observer, weights); default :class:`~pendulum_lqg.policies.lqg.DesignSpec`
     controller, observer : shortcuts that replace ``spec``'s controller / observer
     design_model : ``"nominal"`` (default, as ``bench``) designs on the XML model without the env's
         ``model_overrides`` — a mismatch study; ``"simulated"`` designs on the simulated plant
@@ -84,7 +84,7 @@ class LQGAgent:
             raise ConfigError(f"observer: {spec.observer!r} needs observation_mode={wants!r}, "
                               f"the env has {base.observation_mode!r}")
         #: the env's map between actions and newtons (identity unless normalize_action)
-        self._actions = base._actions
+        self._actions = base.action_map
         self.vector = isinstance(base, CartPoleLQGVectorEnv)
         self.num_envs = base.num_envs if isinstance(base, CartPoleLQGVectorEnv) else 1
         self._obs_dim = 4 if wants == "state" else 2

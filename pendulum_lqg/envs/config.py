@@ -18,15 +18,17 @@ from typing import Any, Literal, overload
 import numpy as np
 from gymnasium import spaces
 
-from pendulum_lqg._config import positive_number
+from pendulum_lqg.core import defaults
 from pendulum_lqg.core.loop import Simulator
 from pendulum_lqg.core.noise import LECTURE_V, NoiseModel
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
-from pendulum_lqg.plant import ModelOverrides, Plant, load_plant
+from pendulum_lqg.model.plant import ModelOverrides, Plant, load_plant
+from pendulum_lqg.names import OBSERVATION_MODES
+from pendulum_lqg.util.config import positive_number
 
 ObservationMode = Literal["measurement", "state"]
-OBSERVATION_MODES: tuple[str, ...] = ("measurement", "state")
+
 
 #: Default reward scale: the cost rate [J/s] at which a step's reward is e⁻¹ (the lecture LQG
 #: policy runs at ≈ 3.4 J/s, the full-state LQR at ≈ 0.18 J/s).
@@ -68,15 +70,16 @@ class EnvConfig:
         return cls.build(**keywords)
 
     @classmethod
-    def build(cls, *, control_period: float = 0.01, duration: float = 10.0,
+    def build(cls, *, control_period: float = defaults.CONTROL_PERIOD,
+              duration: float = defaults.DURATION,
               observation_mode: ObservationMode = "measurement", noise_scale: float = 1.0,
               process_noise: Literal["state", "force"] = "state",
               process_density: float | Sequence[float] | None = None,
               measurement_variance: float | Sequence[float] = LECTURE_V,
-              x0: Sequence[float] = (0.0, 0.1, 0.0, 0.0),
-              x0_std: Sequence[float] = (0.0, 0.0, 0.0, 0.0), theta_max: float = 0.5,
+              x0: Sequence[float] = defaults.X0, x0_std: Sequence[float] = defaults.X0_STD,
+              theta_max: float = defaults.THETA_MAX,
               track_limit: float | None = None, force_limit: float | None = None,
-              cost_Q: Sequence[float] = (1.0, 1.0, 1.0, 1.0), cost_R: float = 1.0,
+              cost_Q: Sequence[float] = defaults.COST_Q, cost_R: float = defaults.COST_R,
               reward_scale: float = DEFAULT_REWARD_SCALE,
               model_overrides: Mapping[str, float] | ModelOverrides | None = None,
               model_path: str | None = None, plant: str = "mujoco",

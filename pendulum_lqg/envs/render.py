@@ -10,7 +10,7 @@ import numpy as np
 
 from pendulum_lqg.envs.config import positive_int
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.plant import CART_BODY, Plant
+from pendulum_lqg.model.plant import CART_BODY, Plant
 
 #: Rendering camera: tracks the cart from the side (the view of the XML's ``side`` camera, but
 #: close enough to frame cart and pole), at this many pole lengths away.

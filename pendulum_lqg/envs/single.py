@@ -228,6 +228,11 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
                 "time": self._sim.t.item(0), "force": force}
 
     @property
+    def action_map(self) -> Actions:
+        """The map between actions and newtons (the identity unless ``normalize_action``)."""
+        return self._actions
+
+    @property
     def normalize_action(self) -> bool:
         """Actions are in ``[−1, 1]`` (mapped onto the force range), not newtons."""
         return self._actions.normalize

@@ -17,7 +17,7 @@ from pendulum_lqg.core.rules import FAIL_NONE, FAIL_REASONS
 from pendulum_lqg.envs.config import Actions, EnvConfig, positive_int, step_reward
 from pendulum_lqg.envs.render import Frames, image_size
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.limits import MAX_NUM_ENVS, check_at_most
+from pendulum_lqg.util.limits import MAX_NUM_ENVS, check_at_most
 
 #: the vector env's info keys, each with its mask's key (Gymnasium's ``_key``), in order
 _INFO_KEYS = tuple((key, "_" + key) for key in ("cost", "running_cost", "state", "y_true",
@@ -108,6 +108,11 @@ class CartPoleLQGVectorEnv(VectorEnv):
         self._waiting = np.zeros(self.num_envs, dtype=bool)   # ended, not yet reset
         self._obs = np.zeros((self.num_envs, dim))
         self._started = False
+
+    @property
+    def action_map(self) -> Actions:
+        """The map between actions and newtons (the identity unless ``normalize_action``)."""
+        return self._actions
 
     def reset(self, *, seed: int | Sequence[int] | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:

@@ -9,13 +9,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.jsonio import plain
-from pendulum_lqg.plant import Plant
+from pendulum_lqg.model.plant import Plant
+from pendulum_lqg.util.jsonio import plain
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
     from pendulum_lqg.core.trajectory import Trajectory
-    from pendulum_lqg.policy import Policy
+    from pendulum_lqg.policies.lqg import Policy
 
 # ---- episode selection ----------------------------------------------------------------------
 def telling_episodes(rows: Sequence[Mapping[str, Any]]) -> dict[str, int]:

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from pendulum_lqg.plant import CART_BODY, HINGE, POLE_BODY, SLIDER, Plant
+from pendulum_lqg.model.plant import CART_BODY, HINGE, POLE_BODY, SLIDER, Plant
 
 if TYPE_CHECKING:
     pass

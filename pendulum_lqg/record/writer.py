@@ -13,12 +13,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.plant import CART_BODY, POLE_BODY, STATE_NAMES, Plant
+from pendulum_lqg.model.plant import CART_BODY, POLE_BODY, STATE_NAMES, Plant
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
     from pendulum_lqg.core.trajectory import Trajectory
-    from pendulum_lqg.policy import Policy
+    from pendulum_lqg.policies.lqg import Policy
 from pendulum_lqg.record.documents import config_markdown, outcome_markdown, summary_markdown
 from pendulum_lqg.record.scene import (
     BAND_COLOR,

@@ -23,12 +23,12 @@ from typing import Any, Protocol
 import gymnasium as gym
 import numpy as np
 
-from pendulum_lqg import ENV_ID, register_envs
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.seeding import episode_seeds
+from pendulum_lqg.envs.registration import ENV_ID, register_envs
 from pendulum_lqg.errors import ConfigError, NotApplicable, PluginError
-from pendulum_lqg.plant import load_plant
-from pendulum_lqg.plugins import build_policy, guard, is_plugin_ref, load_factory
+from pendulum_lqg.model.plant import load_plant
+from pendulum_lqg.policies.loading import build_policy, guard, is_plugin_ref, load_factory
 from pendulum_lqg.scoreboard.suites import Suite
 
 #: The fields of a scored episode row.
@@ -90,7 +90,7 @@ def _check_observation(suite: Suite, name: str, needs_state: bool) -> None:
 # ---- the Gymnasium path ---------------------------------------------------------------------------
 def make_env(suite: Suite, *, normalize_action: bool = False) -> gym.Env:
     """The suite's Gymnasium env (``gymnasium.make`` with the suite's keywords)."""
-    register_envs()          # the pendulum-lqg command skips the registration at import
+    register_envs()          # the package registers the id only when Gymnasium is loaded
     return gym.make(ENV_ID, normalize_action=normalize_action, **suite.env)
 
 

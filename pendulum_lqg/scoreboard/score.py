@@ -150,7 +150,7 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
     score file."""
     from pendulum_lqg.bench.results import versions
     from pendulum_lqg.errors import ConfigError
-    from pendulum_lqg.plugins import guard, is_plugin_ref
+    from pendulum_lqg.policies.loading import guard, is_plugin_ref
     from pendulum_lqg.scoreboard import episodes as ep
 
     if (policy is None) == (agent is None):

@@ -30,10 +30,10 @@ from pendulum_lqg.boundary import read_toml
 from pendulum_lqg.boundary.fields import Invalid, Where, integer, table, text
 from pendulum_lqg.envs.config import EnvConfig
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.limits import MAX_SCORE_EPISODES
+from pendulum_lqg.model.plant import Plant, load_plant
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS
-from pendulum_lqg.plant import Plant, load_plant
-from pendulum_lqg.resources import data_dir
+from pendulum_lqg.util.limits import MAX_SCORE_EPISODES
+from pendulum_lqg.util.resources import data_dir
 
 #: The keys of a suite file.
 SUITE_KEYS = ("name", "version", "purpose", "reference", "episodes", "seed", "env")

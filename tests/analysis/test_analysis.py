@@ -12,8 +12,8 @@ from pendulum_lqg import design
 from pendulum_lqg.analysis import margins as M
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.linearize import discretize_zoh, linearize
-from pendulum_lqg.plant import load_plant
+from pendulum_lqg.model.linearize import discretize_zoh, linearize
+from pendulum_lqg.model.plant import load_plant
 
 ROOT = Path(__file__).resolve().parents[2]
 W_GRID = M.frequency_grid(lo=1e-3, hi=1e3, n=4000)
@@ -151,7 +151,7 @@ def test_sample_period_ordering_discrete_survives_where_emulation_fails():
 def test_roa_bisection_brackets_the_noise_free_boundary():
     from pendulum_lqg.analysis.roa import bisect_theta, success_count
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.policy import DesignSpec, design_policy
+    from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
     plant = load_plant()
     sc = Scenario(duration=3.0, noise=NoiseModel.lecture(scale=0.0), theta_max=1.5)

@@ -14,12 +14,12 @@ import matplotlib
 import numpy as np
 import pytest
 
+from pendulum_lqg import Scenario, run_episodes
 from pendulum_lqg.analysis.episode_plot import STATE_LABELS, plot_episode
 from pendulum_lqg.cli import main
 from pendulum_lqg.core.rules import saturate
-from pendulum_lqg.plant import load_plant
-from pendulum_lqg.plugins import build_policy
-from pendulum_lqg.sim import Scenario, run_episodes
+from pendulum_lqg.model.plant import load_plant
+from pendulum_lqg.policies.loading import build_policy
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -1,4 +1,4 @@
-"""The closed-form stationary loop (pendulum_lqg.analysis.theory) against closed-form answers and
+"""The closed-form stationary loop (pendulum_lqg.policies.theory) against closed-form answers and
 against the Monte Carlo of the linear plant with every limit switched off."""
 
 from __future__ import annotations
@@ -8,19 +8,19 @@ import math
 import numpy as np
 import pytest
 
-from pendulum_lqg.analysis.theory import (
+from pendulum_lqg.core.loop import Simulator
+from pendulum_lqg.core.scenario import Scenario
+from pendulum_lqg.core.seeding import episode_generators, episode_seeds
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.model.plant import load_plant
+from pendulum_lqg.policies.loading import build_policy
+from pendulum_lqg.policies.theory import (
     LinearEstimator,
     StationaryProblem,
     lecture_theory,
     policy_theory,
     stationary,
 )
-from pendulum_lqg.core.loop import Simulator
-from pendulum_lqg.core.scenario import Scenario
-from pendulum_lqg.core.seeding import episode_generators, episode_seeds
-from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.plant import load_plant
-from pendulum_lqg.plugins import build_policy
 
 INF = float("inf")
 STATES = ("p", "theta", "p_dot", "theta_dot")
@@ -182,7 +182,7 @@ def _separation_gap(plant, name):
     """The largest distance from an eigenvalue of the theory's augmented loop to the nearest of
     Φ − ΓK and the observer's poles (0 when the separation principle holds)."""
     from pendulum_lqg.design import zoh
-    from pendulum_lqg.linearize import linearize
+    from pendulum_lqg.model.linearize import linearize
 
     scenario = _free()
     policy = build_policy(name, plant=plant, scenario=scenario)

@@ -6,10 +6,10 @@ import json
 
 import pytest
 
-from pendulum_lqg.analysis.theory import lecture_theory
 from pendulum_lqg.bench.experiments import parse_spec
 from pendulum_lqg.bench.results import config_theory
 from pendulum_lqg.cli import main
+from pendulum_lqg.policies.theory import lecture_theory
 
 GRID = """
 name = "free"

@@ -247,7 +247,7 @@ def test_results_are_byte_identical_for_any_thread_count(tmp_path):
 
 
 def test_a_second_run_into_a_busy_folder_is_refused(tmp_path, capsys):
-    from pendulum_lqg.files import FileLock
+    from pendulum_lqg.util.files import FileLock
 
     out = tmp_path / "out"
     out.mkdir()

@@ -11,7 +11,7 @@ from pendulum_lqg.core.loop import Simulator
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import episode_generators
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.plant import load_plant
+from pendulum_lqg.model.plant import load_plant
 
 INF = float("inf")
 

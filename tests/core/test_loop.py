@@ -17,7 +17,8 @@ from pendulum_lqg.core.runner import MIN_SHARD_ROWS, run_episodes, shard_count
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import episode_seed
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.policy import OBSERVERS, DesignSpec, design_policy
+from pendulum_lqg.names import OBSERVERS
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
 LECTURE = Scenario()
 
@@ -336,7 +337,7 @@ def test_wilson_interval_reference_values():
 
 def test_max_abs_theta_of_a_failed_episode_includes_the_crossing_sample(plant):
     """A pole that fell past θ_max reads max |θ| > θ_max: exactly the first sample beyond it."""
-    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.policies.loading import build_policy
 
     scenario = Scenario(x0=(0.0, 0.45, 0.0, 1.0), duration=2.0)
     policy = build_policy("dlqr+luenberger", plant=plant, scenario=scenario)

@@ -1,4 +1,4 @@
-"""A linear plant given as matrices (pendulum_lqg.lti) through the one loop: against the theory's
+"""A linear plant given as matrices (pendulum_lqg.model.lti) through the one loop: against the theory's
 stationary covariances, against the cart-pole's own linear plant re-stated as matrices, and its
 metrics, limits and failure rule."""
 
@@ -19,9 +19,10 @@ from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import episode_generators, episode_seeds
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.lti import design_lti_policy, load_lti, lti_from_mapping, lti_theory
-from pendulum_lqg.plant import STATE_NAMES, load_plant
-from pendulum_lqg.plugins import build_policy
+from pendulum_lqg.model.lti import load_lti, lti_from_mapping
+from pendulum_lqg.model.plant import STATE_NAMES, load_plant
+from pendulum_lqg.policies.loading import build_policy
+from pendulum_lqg.policies.lti import design_lti_policy, lti_theory
 
 EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments" / "lti"
 INF = math.inf

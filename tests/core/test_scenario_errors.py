@@ -8,13 +8,13 @@ from pendulum_lqg.errors import ConfigError
 
 
 def test_timing_bounds_from_the_python_api():
-    from pendulum_lqg.limits import (
+    from pendulum_lqg.model.plant import ModelOverrides, load_plant, steps_per_period
+    from pendulum_lqg.util.limits import (
         MAX_CONTROL_PERIOD,
         MAX_PERIODS,
         MAX_STEPS_PER_PERIOD,
         check_duration,
     )
-    from pendulum_lqg.plant import ModelOverrides, load_plant, steps_per_period
 
     plant = load_plant()
     assert steps_per_period(plant, MAX_CONTROL_PERIOD) == round(MAX_CONTROL_PERIOD / 1e-3)
@@ -34,8 +34,8 @@ def test_timing_bounds_from_the_python_api():
 
 def test_a_run_with_an_endless_duration_is_refused_before_the_loop():
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.plant import load_plant
-    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.model.plant import load_plant
+    from pendulum_lqg.policies.loading import build_policy
 
     with pytest.raises(ConfigError, match=r"^duration: expected at most"):
         build_policy("dlqr+kalman", plant=load_plant(), scenario=Scenario(duration=1e300))

@@ -12,7 +12,7 @@ import pytest
 from conftest import assert_close_to_stored
 from scipy.linalg import solve_discrete_are
 
-import pendulum_lqg  # noqa: F401  (registers the env ids)
+import pendulum_lqg
 from pendulum_lqg import design
 from pendulum_lqg.bench.experiments import parse_spec
 from pendulum_lqg.cli import main
@@ -23,18 +23,18 @@ from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import child_generator, episode_seed
 from pendulum_lqg.envs.agent import LQGAgent
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.estimators import (
+from pendulum_lqg.model.linearize import discretize_zoh, linearize
+from pendulum_lqg.model.plant import ModelOverrides, load_plant
+from pendulum_lqg.policies.estimators import (
     CurrentEstimator,
     DelayKalman,
     PredictorEstimator,
     TimeVaryingKalman,
 )
-from pendulum_lqg.linearize import discretize_zoh, linearize
-from pendulum_lqg.plant import ModelOverrides, load_plant
-from pendulum_lqg.plugins import build_policy
-from pendulum_lqg.policy import DesignSpec, design_policy, per_sample_process_covariance
+from pendulum_lqg.policies.loading import build_policy
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy, per_sample_process_covariance
 
-ID = "pendulum_lqg/CartPoleLQG-v0"
+ID = pendulum_lqg.ENV_ID           # reading it registers the id
 BASELINE = Path(__file__).parents[1] / "data" / "pre_delay_baseline.json"
 RANDOMIZE = {"pole_mass_scale": (0.5, 2.0), "pole_length_scale": (0.8, 1.25),
              "cart_mass_scale": (0.7, 1.3)}

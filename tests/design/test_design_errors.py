@@ -42,7 +42,7 @@ def test_overflowing_results_raise_instead_of_returning_inf():
 def test_a_finite_horizon_too_long_to_hold_is_refused_at_once():
     import time
 
-    from pendulum_lqg.limits import MAX_RICCATI_FLOATS
+    from pendulum_lqg.util.limits import MAX_RICCATI_FLOATS
 
     Phi, Gamma = np.array([[1.0, 0.01], [0.0, 1.0]]), np.array([[0.0], [0.01]])
     t = time.perf_counter()

@@ -18,7 +18,7 @@ from pendulum_lqg.design.observers import (
     reduced_order_observer,
 )
 from pendulum_lqg.errors import DesignError, ShapeError
-from pendulum_lqg.linearize import linearize
+from pendulum_lqg.model.linearize import linearize
 
 LECTURE_W, LECTURE_V = 4e-4 * np.eye(4), 1e-4 * np.eye(2)   # state density; V·T density
 
@@ -161,7 +161,7 @@ def test_every_new_observer_stabilises_the_noise_free_loop(plant, observer):
     from pendulum_lqg.core.noise import NoiseModel
     from pendulum_lqg.core.runner import run_episodes
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.policies.loading import build_policy
 
     scenario = Scenario(noise=NoiseModel.lecture(scale=0.0))         # θ₀ = 0.1, x̂₀ = 0
     assert scenario.x0_std == (0.0, 0.0, 0.0, 0.0)     # no noise, one start: every episode alike,
@@ -175,7 +175,7 @@ def test_every_new_observer_stabilises_the_noise_free_loop(plant, observer):
 
 def test_h2_policy_equals_the_kalman_bucy_policy(plant):
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.policies.loading import build_policy
 
     scenario = Scenario()
     h2 = build_policy("lqr+h2", plant=plant, scenario=scenario)
@@ -191,7 +191,7 @@ def test_linear_plants_follow_their_difference_equations(plant, kind):
     from pendulum_lqg.core.runner import run_episodes
     from pendulum_lqg.core.scenario import Scenario
     from pendulum_lqg.design import zoh
-    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.policies.loading import build_policy
 
     scenario = Scenario(noise=NoiseModel.lecture(scale=0.0), plant=kind, duration=2.0)
     policy = build_policy("dlqr+kalman", plant=plant, scenario=scenario)

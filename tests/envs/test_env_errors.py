@@ -11,7 +11,7 @@ import pytest
 
 import pendulum_lqg
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.limits import MAX_NUM_ENVS
+from pendulum_lqg.util.limits import MAX_NUM_ENVS
 
 ID = pendulum_lqg.ENV_ID
 

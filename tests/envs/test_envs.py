@@ -31,8 +31,9 @@ from pendulum_lqg.envs.config import REWARD_FLOOR
 from pendulum_lqg.envs.single import CartPoleLQGEnv
 from pendulum_lqg.envs.vector import CartPoleLQGVectorEnv
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.plant import load_plant
-from pendulum_lqg.policy import OBSERVERS, DesignSpec, design_policy
+from pendulum_lqg.model.plant import load_plant
+from pendulum_lqg.names import OBSERVERS
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -96,8 +97,7 @@ def test_registered_with_episode_length_derived_from_duration_and_period():
     base = env.unwrapped
     assert isinstance(base, CartPoleLQGEnv)
     assert env.spec.max_episode_steps == base.max_episode_steps == Scenario().n_periods == 1000
-    assert spec.kwargs == {"duration": Scenario().duration,
-                           "control_period": Scenario().control_period}
+    assert spec.kwargs == {}            # the env's own defaults: those of Scenario
     assert spec.vector_entry_point == "pendulum_lqg.envs.vector:CartPoleLQGVectorEnv"
     # the time limit follows the keywords: 20 s at 10 ms, 10 s at 20 ms, 0.05 s at 10 ms
     assert gym.make(ID, duration=20.0).spec.max_episode_steps == 2000
@@ -110,21 +110,31 @@ def test_registered_with_episode_length_derived_from_duration_and_period():
 
 
 def test_import_registers_as_gymnasium_packages_do_without_an_import_hook():
+    """``import pendulum_lqg`` loads no Gymnasium; the id is registered when Gymnasium was
+    imported first, when ``pendulum_lqg.ENV_ID`` is read, and by the ``module:id`` form."""
     code = textwrap.dedent("""
         import sys
         import pendulum_lqg
+        assert "gymnasium" not in sys.modules and "numpy" not in sys.modules
         import gymnasium as gym
+        assert "pendulum_lqg/CartPoleLQG-v0" not in gym.registry
         assert pendulum_lqg.ENV_ID in gym.registry and "mujoco" not in sys.modules
         assert not any("pendulum" in type(f).__name__.lower() for f in sys.meta_path)
         gym.register_envs(pendulum_lqg)
         print("registered")
+    """)
+    gym_first = textwrap.dedent("""
+        import gymnasium as gym
+        import pendulum_lqg
+        print("pendulum_lqg/CartPoleLQG-v0" in gym.registry)
     """)
     module_form = textwrap.dedent("""
         import gymnasium as gym
         env = gym.make("pendulum_lqg:pendulum_lqg/CartPoleLQG-v0")
         print(type(env.unwrapped).__name__, env.spec.max_episode_steps)
     """)
-    for src, expected in ((code, "registered"), (module_form, "CartPoleLQGEnv 1000")):
+    for src, expected in ((code, "registered"), (gym_first, "True"),
+                          (module_form, "CartPoleLQGEnv 1000")):
         out = subprocess.run([sys.executable, "-c", src], capture_output=True, text=True,
                              timeout=120, check=True)
         assert out.stdout.strip() == expected, out.stderr

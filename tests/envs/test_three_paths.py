@@ -11,7 +11,7 @@ import pendulum_lqg
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.seeding import episode_seed
 from pendulum_lqg.envs.agent import LQGAgent
-from pendulum_lqg.policy import DesignSpec, design_policy
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
 SEED, EPISODES = 5, 6
 

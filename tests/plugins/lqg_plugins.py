@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pendulum_lqg.policy import DesignSpec, design_policy
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
 
 class _Builtin:

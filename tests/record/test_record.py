@@ -16,8 +16,8 @@ from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.trajectory import Trajectory
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.plant import STATE_NAMES, load_plant
-from pendulum_lqg.policy import DesignSpec, design_policy
+from pendulum_lqg.model.plant import STATE_NAMES, load_plant
+from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 from pendulum_lqg.record import (
     episode_prefix,
     physics_samples,
@@ -379,9 +379,9 @@ def test_the_package_never_imports_rerun_unless_recording():
         "import sys, pkgutil, importlib, pendulum_lqg\n"
         "for m in pkgutil.walk_packages(pendulum_lqg.__path__, 'pendulum_lqg.'):\n"
         "    importlib.import_module(m.name)\n"
-        "from pendulum_lqg.plant import load_plant\n"
-        "from pendulum_lqg.policy import design_policy\n"
-        "from pendulum_lqg.sim import Scenario, run_episodes\n"
+        "from pendulum_lqg.model.plant import load_plant\n"
+        "from pendulum_lqg.policies.lqg import design_policy\n"
+        "from pendulum_lqg import Scenario, run_episodes\n"
         "p = load_plant(); s = Scenario(duration=0.2)\n"
         "run_episodes(p, s, design_policy(p, 0.01, s.noise), seed=0, episodes=[0])\n"
         "from pendulum_lqg.record import telling_episodes\n"

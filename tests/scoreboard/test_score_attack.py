@@ -424,13 +424,13 @@ def test_item13_a_toml_file_nested_5000_deep_is_one_line(tmp_path, capsys, kind)
 
 
 # ---- 14: the results folder's lock ----------------------------------------------------------------------
-_HOLD = ("import sys, time; from pathlib import Path; from pendulum_lqg.files import FileLock; "
+_HOLD = ("import sys, time; from pathlib import Path; from pendulum_lqg.util.files import FileLock; "
          "lock = FileLock(Path(sys.argv[1]), where='out:'); lock.acquire(); print('held', "
          "flush=True); time.sleep(3600)")
 
 
 def test_item14_the_results_lock_is_held_by_one_run_and_freed_when_it_dies(tmp_path):
-    from pendulum_lqg.files import FileLock
+    from pendulum_lqg.util.files import FileLock
 
     path = tmp_path / ".lock"
     holder = subprocess.Popen([sys.executable, "-c", _HOLD, str(path)], stdout=subprocess.PIPE,
@@ -459,7 +459,7 @@ def test_item14_a_lock_removed_by_its_holder_between_open_and_flock_is_not_taken
                                                                                    monkeypatch):
     import fcntl
 
-    from pendulum_lqg.files import FileLock
+    from pendulum_lqg.util.files import FileLock
 
     path = tmp_path / ".lock"
     real_flock, calls = fcntl.flock, []
@@ -496,7 +496,7 @@ def test_item15_the_sweep_progress_bar_writes_to_stderr_never_stdout(capsys):
 @pytest.mark.parametrize("stage", ["fsync", "replace"])
 def test_item16_a_failed_atomic_write_leaves_the_old_file_and_no_temporary(tmp_path, monkeypatch,
                                                                            failure, stage):
-    import pendulum_lqg.files as files
+    import pendulum_lqg.util.files as files
 
     target = tmp_path / "score.json"
     target.write_text("old\n")
@@ -511,7 +511,7 @@ def test_item16_a_failed_atomic_write_leaves_the_old_file_and_no_temporary(tmp_p
 
 
 def test_item16_the_atomic_write_fsyncs_the_folder_after_the_rename(tmp_path, monkeypatch):
-    import pendulum_lqg.files as files
+    import pendulum_lqg.util.files as files
 
     target = tmp_path / "new.json"
     synced = []
@@ -529,7 +529,7 @@ def test_item16_the_atomic_write_fsyncs_the_folder_after_the_rename(tmp_path, mo
 @pytest.mark.parametrize("write_bytecode", [True, False])
 def test_item17_a_plugin_edited_within_the_same_second_runs_its_new_bytes(
         tmp_path, monkeypatch, write_bytecode):
-    from pendulum_lqg.plugins import load_factory, source_digest
+    from pendulum_lqg.policies.loading import load_factory, source_digest
 
     monkeypatch.setattr(sys, "dont_write_bytecode", not write_bytecode)
     path = tmp_path / "edited.py"

@@ -27,7 +27,7 @@ from pendulum_lqg.core.physics.mujoco_step import StepPhysics
 from pendulum_lqg.errors import ConfigError
 
 if TYPE_CHECKING:
-    from pendulum_lqg.plant import Plant
+    from pendulum_lqg.model.plant import Plant
 
 #: The MuJoCo backends a simulator can be asked for (``Simulator(backend=…)``).
 BACKENDS: tuple[str, ...] = ("rollout", "step")

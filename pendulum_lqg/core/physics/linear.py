@@ -12,7 +12,7 @@ if TYPE_CHECKING:
     import mujoco
 
     from pendulum_lqg.core.period import PeriodView
-    from pendulum_lqg.plant import Plant
+    from pendulum_lqg.model.plant import Plant
 
 
 class LinearPhysics:
@@ -24,18 +24,18 @@ class LinearPhysics:
     the failure rule and the cost integrate over) lie on the straight line to it, the last one
     exactly on it. State noise is added at the end of the period by the loop, as for MuJoCo; a
     linear plant has no force noise, no actuator lag and no randomised models (the scenario refuses
-    them). An LTI plant given as matrices (:mod:`pendulum_lqg.lti`) is stepped by its own exact
+    them). An LTI plant given as matrices (:mod:`pendulum_lqg.model.lti`) is stepped by its own exact
     sampled model ``x ← Φ x + Γ u``, once per control period (its physics step is T).
     """
 
     def __init__(self, plant: Plant, kind: str, k: int) -> None:
         from pendulum_lqg.design import euler, zoh
-        from pendulum_lqg.linearize import linearize
+        from pendulum_lqg.model.linearize import linearize
 
         self.kind, self.k = kind, k
         self._frac = (np.arange(1, k + 1) / k)[None, :, None]
         if getattr(plant, "is_lti", False):        # an LTIPlant: its own (Φ, Γ) at T, k = 1
-            lti: Any = plant                       # (pendulum_lqg.lti imports the core)
+            lti: Any = plant                       # (pendulum_lqg.model.lti imports the core)
             self.Phi, self.Gamma = lti.Phi, lti.Gamma[:, 0]
             return
         lin = linearize(plant)

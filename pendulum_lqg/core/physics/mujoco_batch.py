@@ -13,7 +13,7 @@ from pendulum_lqg.errors import ConfigError
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.period import PeriodView
-    from pendulum_lqg.plant import Plant
+    from pendulum_lqg.model.plant import Plant
 
 
 #: Whether a held-force period calls ``Batch.rollout``'s C++ core (``batch._b.rollout``) directly:

@@ -9,7 +9,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.period import PeriodView
-    from pendulum_lqg.plant import Plant
+    from pendulum_lqg.model.plant import Plant
 
 #: MuJoCo's warnings for an unstable state (it then resets the data).
 INSTABILITY_WARNINGS = tuple(int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS,

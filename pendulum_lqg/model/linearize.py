@@ -21,7 +21,7 @@ import numpy as np
 
 from pendulum_lqg.design import zoh
 from pendulum_lqg.design.structure import StructureReport, structure
-from pendulum_lqg.plant import Plant, steps_per_period
+from pendulum_lqg.model.plant import Plant, steps_per_period
 
 #: Finite-difference step for states and inputs (central differences: error O(eps²)).
 FD_EPS = 1e-6

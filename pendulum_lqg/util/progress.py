@@ -2,7 +2,7 @@
 
 When stderr is a terminal, a rich progress bar (done / total, elapsed, ETA) drawn on stderr;
 otherwise nothing, or — with ``lines=True`` (``run``) — one plain line every
-:data:`~pendulum_lqg.limits.PROGRESS_EVERY_S` seconds once the work takes that long. stdout stays
+:data:`~pendulum_lqg.util.limits.PROGRESS_EVERY_S` seconds once the work takes that long. stdout stays
 free for the command's output (``--json``, a table, a pipe).
 """
 
@@ -12,7 +12,7 @@ import sys
 import time
 from typing import Any
 
-from pendulum_lqg import limits
+from pendulum_lqg.util import limits
 
 
 class Progress:

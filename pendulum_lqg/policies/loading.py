@@ -46,14 +46,14 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError, PluginError
-from pendulum_lqg.watchdog import watched
+from pendulum_lqg.util.watchdog import watched
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.noise import NoiseModel
     from pendulum_lqg.core.protocol import PolicyProtocol
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.plant import Plant
-    from pendulum_lqg.policy import DesignSpec
+    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.policies.lqg import DesignSpec
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,7 +83,7 @@ class PolicyContext:
         ``[−u_max, u_max]`` by the core (:func:`pendulum_lqg.core.rules.limits`).
     Q : (4, 4), R : (1, 1)
         Weights of the benchmark's cost ``J = ∫ xᵀQx + uᵀRu dt``.
-    plant : pendulum_lqg.plant.Plant
+    plant : pendulum_lqg.model.plant.Plant
         The nominal MuJoCo plant (advanced use: parameters, the compiled model).
     noise : pendulum_lqg.core.noise.NoiseModel
         The nominal noise model (``W``/``V`` above come from it).
@@ -111,15 +111,15 @@ class PolicyContext:
     def build(cls, plant: Plant, scenario: Scenario) -> PolicyContext:
         """The context of ``plant`` (nominal) under ``scenario``'s period, noise and cost."""
         from pendulum_lqg.core.rules import limits
-        from pendulum_lqg.linearize import discretize_zoh, linearize
-        from pendulum_lqg.plant import steps_per_period
-        from pendulum_lqg.policy import noise_design_matrices
+        from pendulum_lqg.model.linearize import discretize_zoh, linearize
+        from pendulum_lqg.model.plant import steps_per_period
+        from pendulum_lqg.policies.observers import noise_design_matrices
 
         steps_per_period(plant, scenario.control_period)
         lin = linearize(plant)
         dt = float(scenario.control_period)
         disc = discretize_zoh(lin, dt)
-        G, W_in = noise_design_matrices(lin, scenario.noise, dt)
+        G, W_in = noise_design_matrices(lin, scenario.noise)
         return cls(A=lin.A, B=lin.B, C=lin.C, Phi=disc.Phi, Gamma=disc.Gamma, dt=dt,
                    W=G @ W_in @ G.T, V=scenario.noise.V, u_max=limits(plant, scenario)[2],
                    Q=np.diag(scenario.cost_Q), R=np.array([[scenario.cost_R]]), plant=plant,
@@ -150,7 +150,7 @@ def resolve_ref(ref: str, base_dir: Path | None = None) -> str:
         return ref
     path = Path(module).expanduser()
     if not path.is_absolute():
-        from pendulum_lqg.resources import data_dir
+        from pendulum_lqg.util.resources import data_dir
 
         candidates = [base_dir / path] if base_dir is not None else []
         candidates += [Path.cwd() / path, data_dir("experiments") / path]
@@ -284,8 +284,8 @@ def guard(label: str, what: str, fn: Callable[..., Any], *args: Any,
     turned into one :class:`PluginError` line ``LABEL: WHAT raised …``: every exception,
     ``SystemExit`` (``sys.exit`` in user code) included, except a Ctrl-C (``KeyboardInterrupt``),
     which stops the run as a Ctrl-C does. A call that does not return within the active
-    :class:`~pendulum_lqg.watchdog.Watchdog`'s limit is stopped with a
-    :class:`~pendulum_lqg.watchdog.CallTimeout` line. User code cannot end the run with a success
+    :class:`~pendulum_lqg.util.watchdog.Watchdog`'s limit is stopped with a
+    :class:`~pendulum_lqg.util.watchdog.CallTimeout` line. User code cannot end the run with a success
     status or without a message this way (``os._exit`` ends the process at once, uncatchable;
     docs/reliability.md). Exceptions of the types ``passing`` are re-raised as they are (an
     agent's factory declines a suite with :class:`~pendulum_lqg.errors.NotApplicable`)."""
@@ -503,7 +503,7 @@ def build_policy(name: str | None, *, plant: Plant, scenario: Scenario,
     base_dir : folder that relative plugin file paths are taken from (an experiment file's folder)
     context : a prebuilt :class:`PolicyContext` (saves re-linearising for many plugins)
     """
-    from pendulum_lqg.policy import DesignSpec, delay_periods, design_policy
+    from pendulum_lqg.policies.lqg import DesignSpec, delay_periods, design_policy
 
     spec = spec or DesignSpec()
     if name is not None and is_plugin_ref(name):

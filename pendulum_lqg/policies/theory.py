@@ -43,8 +43,8 @@ from pendulum_lqg.names import LECTURE_POLICIES
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.plant import Plant
-    from pendulum_lqg.policy import DesignSpec
+    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.policies.lqg import DesignSpec
 
 
 
@@ -74,7 +74,7 @@ def linear_estimator(policy: Any) -> LinearEstimator:
     ``x̂ = T⁻¹[y; z + G y]``; the time-varying Kalman filter at its steady gain. Refuses
     plugins and the delay-augmented filter with one line naming the policy.
     """
-    from pendulum_lqg import estimators as est_mod
+    from pendulum_lqg.policies import estimators as est_mod
 
     est = getattr(policy, "estimator", None)
     name = getattr(policy, "name", repr(policy))
@@ -224,7 +224,7 @@ class ClosedLoopTheory:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: ``spectral_radius, stable, std.{p, theta, p_dot, theta_dot}, u_std,
         estimate_error_std.{…}, cost_rate`` and more (eigenvalues as ``[re, im]``)."""
-        from pendulum_lqg.jsonio import plain
+        from pendulum_lqg.util.jsonio import plain
 
         return {"plant": self.plant, "spectral_radius": self.spectral_radius,
                 "stable": self.stable, "std": dict(self.std), "rms": dict(self.rms),
@@ -313,8 +313,8 @@ def policy_theory(plant: Plant, scenario: Scenario, policy: Any, *,
     """
     from pendulum_lqg.core.physics.linear import LinearPhysics
     from pendulum_lqg.core.rules import limits
-    from pendulum_lqg.linearize import linearize
-    from pendulum_lqg.plant import steps_per_period
+    from pendulum_lqg.model.linearize import linearize
+    from pendulum_lqg.model.plant import steps_per_period
 
     kind = plant_kind or (scenario.plant if scenario.plant != "mujoco" else "linear-zoh")
     if kind not in ("linear-zoh", "linear-euler"):
@@ -352,8 +352,8 @@ def lecture_theory(names: Sequence[str] = LECTURE_POLICIES, *, plant: Plant | No
     :data:`~pendulum_lqg.names.LECTURE_POLICIES`) on the plant (default the shipped model) under
     ``scenario`` (default the lecture's), designed with ``spec``'s weights and poles."""
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.plant import load_plant
-    from pendulum_lqg.plugins import build_policy, is_plugin_ref
+    from pendulum_lqg.model.plant import load_plant
+    from pendulum_lqg.policies.loading import build_policy, is_plugin_ref
 
     plant = plant if plant is not None else load_plant()
     scenario = scenario if scenario is not None else Scenario()

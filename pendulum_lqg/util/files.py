@@ -17,6 +17,15 @@ from pathlib import Path
 
 from pendulum_lqg.errors import ConfigError
 
+FILE_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
+          (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+          (stat.S_ISSOCK, "a socket"))
+
+
+def file_kind(mode: int) -> str:
+    """What a file of ``st_mode`` ``mode`` is, for a message ("a FIFO (named pipe)")."""
+    return next((name for test, name in FILE_KINDS if test(mode)), "not a regular file")
+
 
 def output_file(where: str, path: str | os.PathLike[str] | None, *, what: str = "file") -> Path:
     """``path`` checked as the target of an output file, before any work starts.
@@ -45,8 +54,6 @@ def regular_target(where: str, path: Path, *, what: str = "file") -> Path:
     """The file ``path`` names (a symbolic link followed), which must be absent or a regular
     file; anything else — a device, a FIFO, a socket, a folder — is one :class:`ConfigError` line,
     and is left as it is."""
-    from pendulum_lqg.boundary import file_kind
-
     target = path.resolve() if path.is_symlink() else path
     try:
         mode = os.stat(target).st_mode

@@ -1,7 +1,7 @@
 """A watchdog for user code: a plug-in or agent call that has not returned within a time limit ends
 the run with one line naming the call (``pendulum-lqg run/score --call-timeout S``).
 
-Every call into user code goes through :func:`pendulum_lqg.plugins.guard`, which tells the active
+Every call into user code goes through :func:`pendulum_lqg.policies.loading.guard`, which tells the active
 :class:`Watchdog` (if any) when the call starts and ends. A monitor thread checks the running calls;
 one past its limit is interrupted in the main thread by a ``SIGALRM`` whose handler raises
 :class:`CallTimeout` there (a one-line :class:`~pendulum_lqg.errors.PluginError`). That reaches

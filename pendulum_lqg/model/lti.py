@@ -4,10 +4,8 @@ A separate, explicit kind of plant beside the MuJoCo cart-pole (whose MJCF model
 source of truth of the cart-pole): the documents' double integrator, Franklin's third-order plant
 and Ogata's discrete example are files in ``experiments/lti/``, read by
 :func:`load_lti` from TOML or ``.npz``. An :class:`LTIPlant` carries its own noise (the density W
-of w, the per-sample covariance V of v), cost weights and force limit; :func:`design_lti_policy`
-designs the built-in controllers and observers on it, returning the same runtime
-:class:`~pendulum_lqg.policy.Policy`, and :func:`lti_theory` gives its stationary closed loop
-(:mod:`pendulum_lqg.analysis.theory`).
+of w, the per-sample covariance V of v), cost weights and force limit; its designs, scenario and
+stationary closed loop are :mod:`pendulum_lqg.policies.lti`'s.
 
 A TOML file::
 
@@ -46,8 +44,8 @@ from typing import Any
 
 import numpy as np
 
-from pendulum_lqg._config import check_keys, positive_limit, positive_number
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.util.config import check_keys, positive_limit, positive_number
 
 #: The keys of an LTI plant file.
 LTI_KEYS = ("name", "description", "control_period", "A", "B", "C", "G", "Phi", "Gamma",
@@ -250,88 +248,3 @@ def load_lti(path: str | Path) -> LTIPlant:
         return lti_from_mapping(data, name=path.name.split(".")[0], path=path)
     except ConfigError as exc:
         raise ConfigError(f"{exc} (in {path})") from exc
-
-
-def design_lti_policy(plant: LTIPlant, name: str, *, u_max: float | None = None) -> Any:
-    """The built-in policy ``"controller+observer"`` on ``plant``: ``lqr`` (continuous, emulated
-    under sample-and-hold) or ``dlqr`` (on the ZOH model with the exact sampled cost weights);
-    observers ``none``, ``kalman`` (steady-state filter, current form), ``kalman-predictor``,
-    ``luenberger`` (current form, the plant's ``observer_poles`` by z = e^{sT}, default three
-    times the controller's). ``u_max``: the force limit in force, to which the policy saturates
-    its own output (default the file's ``force_limit``). Returns a
-    :class:`~pendulum_lqg.policy.Policy`."""
-    from pendulum_lqg import design
-    from pendulum_lqg.estimators import CurrentEstimator, PredictorEstimator, TrueState
-    from pendulum_lqg.policy import Policy
-
-    controller, _, observer = name.partition("+")
-    if controller not in LTI_CONTROLLERS or observer not in LTI_OBSERVERS:
-        raise ConfigError(f"policy: expected one of {', '.join(LTI_CONTROLLERS)} + one of "
-                          f"{', '.join(LTI_OBSERVERS)} for an LTI plant, got {name!r}")
-    T, Phi, Gamma, C = plant.control_period, plant.Phi, plant.Gamma, plant.C
-    if controller == "lqr":
-        if plant.A is None or plant.B is None:
-            raise ConfigError(f"policy: {plant.name!r} is given in discrete time; use dlqr")
-        K = design.lqr(plant.A, plant.B, plant.Q, plant.R).K
-    elif plant.A is not None and plant.B is not None:
-        Qd, Rd, Nd = design.sampled_cost(plant.A, plant.B, plant.Q, plant.R, T)
-        K = design.dlqr(Phi, Gamma, Qd, Rd, N=Nd).K
-    else:
-        K = design.dlqr(Phi, Gamma, plant.Q, plant.R).K
-    info: dict[str, Any] = {"K": K, "Phi": Phi, "Gamma": Gamma, "C": C}
-    n = plant.n_states
-    est: Any
-    if observer == "none":
-        est = TrueState(n)
-    elif observer in ("kalman", "kalman-predictor"):
-        kf = design.dkalman(Phi, np.eye(n), C, plant.process_covariance(), plant.V)
-        est = (CurrentEstimator(Phi, Gamma, C, kf.L, P=kf.P, M=kf.M) if observer == "kalman"
-               else PredictorEstimator(Phi - kf.L_pred @ C, Gamma, kf.L_pred, C, P=kf.M, M=kf.M))
-        info["L"], info["observer_poles"] = est.gain, kf.poles
-    else:
-        if plant.observer_poles is not None:     # s-plane, mapped by z = e^{sT}
-            obs = design.dluenberger(Phi, C, np.asarray(plant.observer_poles), form="current",
-                                     dt=T)
-        else:     # 3× the controller's s-poles, the documents' rule: z = z_c³ (e^{3sT})
-            z = np.linalg.eigvals(Phi - Gamma @ K)
-            obs = design.dluenberger(Phi, C, z ** 3, form="current")
-        est = CurrentEstimator(Phi, Gamma, C, obs.L)
-        info["L"], info["observer_poles"] = obs.L, obs.poles
-    return Policy(K=K, estimator=est, u_max=plant.force_limit if u_max is None else float(u_max),
-                  name=name,
-                  x_hat0=np.zeros(n), info=info)
-
-
-def lti_scenario(plant: LTIPlant, *, duration: float = 10.0, noise_scale: float = 1.0,
-                 **fields: Any) -> Any:
-    """The :class:`~pendulum_lqg.core.scenario.Scenario` an LTI plant runs under (``run --lti``,
-    ``bench`` with ``lti_file``): its own period, the plant ``linear-zoh`` (its exact sampled
-    model), the noise ``scale`` (its W and V come from the file), and any other scenario
-    ``fields`` (``estimate0``, ``force_limit``, the delays, ``dropout``)."""
-    from pendulum_lqg.core.noise import NoiseModel
-    from pendulum_lqg.core.scenario import Scenario
-
-    return Scenario(control_period=plant.control_period, duration=duration, plant="linear-zoh",
-                    noise=NoiseModel(scale=noise_scale), **fields)
-
-
-def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+luenberger"), *,
-               noise_scale: float = 1.0, duration: float = 10.0) -> dict[str, Any]:
-    """The stationary closed loop (:class:`~pendulum_lqg.analysis.theory.ClosedLoopTheory`) of
-    each built-in policy on ``plant`` with its noise scaled by ``noise_scale`` (std)."""
-    from pendulum_lqg.analysis.theory import StationaryProblem, linear_estimator, stationary
-
-    s2 = float(noise_scale) ** 2
-    out = {}
-    for name in names:
-        policy = design_lti_policy(plant, name)
-        prob = StationaryProblem(kind="linear-zoh", Phi=plant.Phi, Gamma=plant.Gamma, k=1,
-                                 h=plant.control_period, C=plant.C, K=policy.K,
-                                 estimator=linear_estimator(policy),
-                                 Wd=plant.process_covariance() * s2, V=plant.V * s2,
-                                 Q=plant.Q, R=plant.R)
-        out[name] = stationary(prob, name=name, duration=duration,
-                               limits={"force_limit": plant.force_limit},
-                               state_names=plant.state_names,
-                               units=("",) * plant.n_states)
-    return out

@@ -19,9 +19,9 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from pendulum_lqg._config import check_keys, positive_number
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.limits import MAX_STEPS_PER_PERIOD, check_control_period
+from pendulum_lqg.util.config import check_keys, positive_number
+from pendulum_lqg.util.limits import MAX_STEPS_PER_PERIOD, check_control_period
 
 STATE_NAMES: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")
 OUTPUT_NAMES: tuple[str, ...] = ("p", "theta")
@@ -34,7 +34,7 @@ SENSORS = ("cart_position", "pole_angle")
 
 def default_model_path() -> Path:
     """Path of the bundled ``cartpole.xml`` (the checkout's ``models/`` or the installed copy)."""
-    from pendulum_lqg.resources import model_path
+    from pendulum_lqg.util.resources import model_path
 
     return model_path()
 
@@ -437,7 +437,7 @@ def steps_per_period(plant: Plant, dt: float) -> int:
 
     ``dt`` must be a whole number k of physics steps h with ``1 ≤ k ≤``
     :data:`MAX_STEPS_PER_PERIOD` and ``dt`` within the bounds of
-    :func:`~pendulum_lqg.limits.check_control_period`; otherwise a one-line :class:`ConfigError`
+    :func:`~pendulum_lqg.util.limits.check_control_period`; otherwise a one-line :class:`ConfigError`
     naming ``control_period``.
     """
     dt = check_control_period(dt)
