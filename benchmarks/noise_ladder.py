@@ -49,9 +49,9 @@ def trained_noise(model: Path) -> float:
 
 def score(models: list[Path], scales: list[float], suite_name: str, out: Path, *,
           matched: bool, episodes: int | None) -> None:
-    from pendulum_lqg.files import atomic_write
     from pendulum_lqg.scoreboard.score import score_entry
     from pendulum_lqg.scoreboard.suites import load_suite
+    from pendulum_lqg.util.files import atomic_write
 
     suite = load_suite(suite_name).with_episodes(episodes)
     folder = out

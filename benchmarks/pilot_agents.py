@@ -1,8 +1,9 @@
 """The pilot that chose the RL baselines' history length K, exploration ``log_std_init`` and γ.
 
 One factor at a time around a centre (K = 32, ``log_std_init`` = −1, γ = 0.995): K ∈ {16, 32, 64},
-``log_std_init`` ∈ {−1, −2}, γ ∈ {0.99, 0.995, 0.998}, six PPO-history variants, each trained on two pilot training seeds (100 and 101: never the
-suites' seed 2026, nor the final runs' seeds 0–4) for ``--steps`` env steps; each variant's last
+``log_std_init`` ∈ {−1, −2}, γ ∈ {0.99, 0.995, 0.998}, six PPO-history variants, each trained on
+two pilot training seeds (100 and 101: never the suites' seed 2026, nor the final runs' seeds
+0–4) for ``--steps`` env steps; each variant's last
 learning-curve point (20 episodes from :data:`train_agents.EVAL_SEED`, the deterministic policy)
 is written to ``experiments/agents/pilot/pilot.csv``. The selection rule: the variant with the
 highest mean failure-aware score over the two pilot seeds; ties broken by success rate, then by
@@ -27,7 +28,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from train_agents import METHODS, Method, run_name, train  # noqa: E402
+from train_agents import METHODS, Method, run_name, train
 
 #: The search space — history length K, the policy's initial log std, the discount γ — walked one
 #: factor at a time from CENTRE (a full grid of 18 variants × 2 seeds would cost 3× the CPU time).

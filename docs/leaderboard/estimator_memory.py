@@ -3,7 +3,7 @@
     uv run python docs/leaderboard/estimator_memory.py    # → docs/leaderboard/estimator_memory.md
 
 For each measurement suite's reference design (built as the suites build it:
-:func:`~pendulum_lqg.plugins.build_policy` on the suite's nominal plant and scenario), the
+:func:`~pendulum_lqg.policies.loading.build_policy` on the suite's nominal plant and scenario), the
 eigenvalues ``z`` of its estimator's error dynamics (``policy.info["observer_poles"]``: for the
 current-form Kalman filter the eigenvalues of ``(I − LC)Φ``; for ``kalman-delay`` those of the
 delay-augmented filter, whose delay-line modes are at ``z ≈ 0``) and each mode's time constant
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pendulum_lqg.plugins import build_policy
+from pendulum_lqg.policies.loading import build_policy
 from pendulum_lqg.scoreboard.suites import Suite, load_suite, suite_names
 
 HERE = Path(__file__).resolve().parent

@@ -209,7 +209,7 @@ def lqg_gains(model: IdentifiedModel, Q: np.ndarray, R: np.ndarray,
     """``(K, L)`` of the LQG design on ``model``: the discrete LQR of the exact sampled cost
     (:func:`~pendulum_lqg.design.sampled_cost` of ``J = ∫ xᵀQx + uᵀRu dt``) and the steady-state
     Kalman filter gain (current form) for the model's ``W`` and ``V`` — the design
-    :func:`~pendulum_lqg.policy.design_policy` makes for ``dlqr+kalman``."""
+    :func:`~pendulum_lqg.policies.lqg.design_policy` makes for ``dlqr+kalman``."""
     Qd, Rd, Nd = design.sampled_cost(model.A, model.B, Q, R, model.dt)
     K = design.dlqr(model.Phi, model.Gamma, Qd, Rd, N=Nd).K
     L = design.dkalman(model.Phi, np.eye(model.Phi.shape[0]), model.C, model.W, model.V).L

@@ -138,7 +138,7 @@ def lqg_state_space(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, K: np.nda
                     L: np.ndarray) -> dict[str, list[list[float]]]:
     """The steady-state LQG controller ``u = −K x̂`` with the current-form estimator
     ``x̂_k = x̄_k + L (y_k − C x̄_k)``, ``x̄_{k+1} = Φ x̂_k + Γ u_k`` (the built-ins'
-    :class:`~pendulum_lqg.estimators.CurrentEstimator`), as a state-space controller of
+    :class:`~pendulum_lqg.policies.estimators.CurrentEstimator`), as a state-space controller of
     ``z_k = [y_k, u_{k−1}]`` (``action_scale`` 1 N).
 
     With ``ξ_k = x̂_{k−1}``: ``x̄_k = Φ ξ_k + Γ u_{k−1}``, so ``x̂_k = (I − LC)(Φ ξ_k + Γ u_{k−1})

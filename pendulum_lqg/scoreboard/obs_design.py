@@ -12,7 +12,7 @@ observation it was trained on:
   a scenario's smaller ``force_limit`` saturates it further inside the env, unseen);
 * ``estimator = "kalman"`` — each frame holds, instead of ``y_t``, the estimate ``x̂_t`` (4 numbers,
   ``[p, θ, ṗ, θ̇]``) of the reference steady-state Kalman filter (``dlqr+kalman``'s estimator,
-  :func:`~pendulum_lqg.plugins.build_policy` on the env's nominal plant, control period and nominal
+  :func:`~pendulum_lqg.policies.loading.build_policy` on the env's nominal plant, control period and nominal
   noise, as the suites' reference designs it) fed with ``y_t`` and the force applied before it:
   the action mapped to newtons as the env maps it and saturated by the core's rule
   (:func:`~pendulum_lqg.core.rules.saturate`), so it is the force the reference's own estimator
@@ -100,8 +100,8 @@ class KalmanEstimates:
 
     def __init__(self, config: EnvConfig, normalize_action: bool, n: int) -> None:
         from pendulum_lqg.envs.config import Actions
-        from pendulum_lqg.plant import load_plant
-        from pendulum_lqg.plugins import build_policy
+        from pendulum_lqg.model.plant import load_plant
+        from pendulum_lqg.policies.loading import build_policy
 
         if config.observation_mode != "measurement":
             raise ConfigError("estimator: 'kalman' estimates x from y = [p, θ]; this env observes "

@@ -17,7 +17,7 @@ from pendulum_lqg.design.sysid import (
 
 @pytest.fixture(scope="module")
 def truth():
-    from pendulum_lqg.plugins import PolicyContext
+    from pendulum_lqg.policies.loading import PolicyContext
     from pendulum_lqg.scoreboard.suites import load_suite
 
     suite = load_suite("lecture")
@@ -71,7 +71,7 @@ def test_noisy_episodes_give_the_unstable_pole_and_the_noise_within_tolerance(tr
 
 
 def test_lqg_on_the_true_model_is_the_builtin_design(truth):
-    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.policies.loading import build_policy
     from pendulum_lqg.scoreboard.suites import load_suite
 
     suite = load_suite("lecture")

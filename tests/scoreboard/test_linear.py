@@ -34,7 +34,7 @@ def suite():
 
 @pytest.fixture(scope="module")
 def lqg_file(suite, tmp_path_factory):
-    from pendulum_lqg.plugins import build_policy
+    from pendulum_lqg.policies.loading import build_policy
 
     info = build_policy("dlqr+kalman", plant=suite.plants()[1],
                         scenario=suite.config.scenario).info

@@ -15,7 +15,7 @@ import pendulum_lqg
 from pendulum_lqg.core.rules import saturate
 from pendulum_lqg.envs.agent import LQGAgent
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.plugins import build_policy
+from pendulum_lqg.policies.loading import build_policy
 from pendulum_lqg.scoreboard.obs_design import ObservationDesign, ObservationHistory
 
 #: lossy: lost samples (nan) take the filter's prediction step; a short episode

@@ -310,7 +310,7 @@ def test_item09_suite_file_errors_name_the_file_and_the_key_not_the_policy(
 def test_item10_a_render_height_beyond_the_buffer_names_height():
     import gymnasium as gym
 
-    from pendulum_lqg import ENV_ID, register_envs
+    from pendulum_lqg.envs.registration import ENV_ID, register_envs
 
     register_envs()
     with pytest.raises(ConfigError, match=r"^height: at most \d+ pixels .*got 1000000000$"):
