@@ -24,7 +24,8 @@ def test_a_short_run_saves_its_model_record_and_curve_and_scores_with_its_design
     spec.loader.exec_module(train_agents)
     model, venv, _ = train_agents.build(train_agents.METHODS["sac-history"], 2)
     native = venv.unwrapped                       # below VecNormalize and the history wrapper
-    assert native._seeds == [train_agents.TRAIN_SEED_BASE + 2000 + i for i in range(4)]
+    n_envs = train_agents.METHODS["sac-history"].envs
+    assert native._seeds == [train_agents.TRAIN_SEED_BASE + 2000 + i for i in range(n_envs)]
     assert model.seed == 2
     path = train_agents.train("ppo-history", tmp_path, seed=1, steps=512, eval_every=512)
     assert path.name == "ppo-history-seed1.zip"
