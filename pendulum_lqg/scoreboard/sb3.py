@@ -26,6 +26,9 @@ Nothing here imports torch until a model is loaded.
 
 from __future__ import annotations
 
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -83,6 +86,25 @@ def read_metadata(path: Path) -> dict[str, Any]:
     if not meta_path.exists():
         raise ConfigError(f"agent: sb3:{path} needs its training record {meta_path} (no such file)")
     return training_record(meta_path, where_text="agent")
+
+
+@contextmanager
+def one_torch_thread() -> Iterator[None]:
+    """torch on one thread while the block asks a model: a batch of at most a few hundred rows
+    through a small network gains nothing from more threads, which would contend with the physics
+    for the same cores, and a predict's floats then do not depend on the machine's core count (a
+    re-score reproduces its score file). The previous thread count is restored after. Without
+    torch loaded (a stand-in model) there is nothing to set."""
+    torch = sys.modules.get("torch")
+    if torch is None:
+        yield
+        return
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
 
 
 def load_model(path: Path, algo: str) -> Any:

@@ -42,10 +42,13 @@ def batched_rows(suite: Suite, factory: Any, *, normalize_action: bool | None = 
     if mode != trained_on:
         raise NotApplicable(f"agent sb3:{factory.path_text} was trained on observation_mode = "
                             f"{trained_on!r}; this suite's env has {mode!r}")
+    from pendulum_lqg.scoreboard.sb3 import one_torch_thread
+
     seeds = list(episode_seeds(suite.seed, range(suite.episodes)))
     rows: list[dict[str, Any]] = []
-    for start in range(0, len(seeds), CHUNK):
-        rows += _chunk(suite, factory, seeds[start:start + CHUNK], start, normalized)
+    with one_torch_thread():
+        for start in range(0, len(seeds), CHUNK):
+            rows += _chunk(suite, factory, seeds[start:start + CHUNK], start, normalized)
     return rows
 
 
