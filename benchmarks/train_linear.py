@@ -43,7 +43,7 @@ actuator never saturates and the logged input is the applied one), samples after
 dropped; least squares of the Markov parameters and the free response, the structured model in the
 basis ``[y, ẏ]``, the noise covariances, then LQG (discrete LQR of the sampled cost and the
 steady-state Kalman filter, :func:`~pendulum_lqg.design.sysid.lqg_gains`) written as a state-space
-controller. The curve identifies from the first 5k, 10k, 20k, 50k, 100k and 200k logged steps; the
+controller. The curve identifies from the first 5k, 10k, 20k, 50k, 100k, 200k, 500k and 1M logged steps; the
 file keeps the largest budget's controller.
 """
 
@@ -63,7 +63,7 @@ from train_agents import EVAL_EPISODES, EVAL_SEED, TRAIN_SEED_BASE, eval_suite
 
 METHODS = {"ars-history": "ARS V2-t: random search over a linear policy of the last K (y, u)",
            "sysid-lqg": "least-squares identification from open-loop episodes, then LQG"}
-SYSID_BUDGETS = (5_000, 10_000, 20_000, 50_000, 100_000, 200_000)
+SYSID_BUDGETS = (5_000, 10_000, 20_000, 50_000, 100_000, 200_000, 500_000, 1_000_000)
 
 
 @dataclass(frozen=True)
