@@ -3,6 +3,7 @@ improvement and learning curves, from the committed score files and curves (noth
 
     uv run python benchmarks/rl_figures.py profile docs/leaderboard/scores   # → profile.png, improvement.md
     uv run python benchmarks/rl_figures.py curves experiments/agents/models  # → curves.png
+    uv run python benchmarks/rl_figures.py budget experiments/agents/models  # → budget.md
 
 ``profile``: the score files that name a ``method`` (one per training seed, as ``board``'s methods
 table reads them) and the single entries named by ``--entry`` (default the LQG reference
@@ -21,6 +22,12 @@ method, and ``curves.png``: per method the median and the interquartile range ac
 success and score against env steps and against wall time. A run's points are linearly
 interpolated onto a common grid inside its own range (a grid point beyond a run's last point
 leaves that run out there); the figure says how many seeds each method has.
+
+``budget``: every training record of a run (``METHOD-seedS.json``: an SB3 model's record, its
+``budget``, or a linear controller's ``training``) grouped by method, and ``budget.md``: per method
+the runs, the env steps of one run, the median wall time of a run, and the CPU-hours of all its
+runs (wall seconds × the threads a run used, one for every method here: torch on one thread, one
+physics thread). Wall times are those of the machine and load the run had.
 """
 
 from __future__ import annotations
@@ -172,6 +179,46 @@ def draw_curves(curves: dict[str, list[dict[str, np.ndarray]]], path: Path) -> N
     fig.savefig(path, dpi=120)
 
 
+# ---- training budgets ----------------------------------------------------------------------------
+RUN_FILE = re.compile(r"^(?P<method>.+)-seed(?P<seed>\d+)\.json$")
+
+
+def read_budgets(folder: Path) -> dict[str, list[tuple[int, float, int]]]:
+    """``{method: [(env steps, wall seconds, threads) per run]}`` from the runs' records."""
+    import json
+
+    out: dict[str, list[tuple[int, float, int]]] = {}
+    for path in sorted(folder.glob("*-seed*.json")):
+        if not RUN_FILE.match(path.name):
+            continue
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        if "budget" in doc:                                     # an SB3 model's training record
+            budget = doc["budget"]
+            run = (int(budget["steps"]), float(budget["wall_seconds"]), int(budget["threads"]))
+        elif "training" in doc:                                 # a linear controller's
+            t = doc["training"]
+            run = (int(t["budget"]["steps"]), float(t["wall_seconds"]), 1)
+        else:
+            continue
+        out.setdefault(str(doc["method"]), []).append(run)
+    return out
+
+
+def budget_table(budgets: dict[str, list[tuple[int, float, int]]]) -> str:
+    lines = ["| method | runs | env steps per run | wall time of a run (median) | CPU-hours, all runs |",
+             "|---|---|---|---|---|"]
+    total = 0.0
+    for method, runs in sorted(budgets.items()):
+        steps = sorted({r[0] for r in runs})
+        shown = f"{steps[0]:,}" if len(steps) == 1 else f"{steps[0]:,} – {steps[-1]:,}"
+        hours = sum(r[1] * r[2] for r in runs) / 3600
+        total += hours
+        lines.append(f"| `{method}` | {len(runs)} | {shown} | "
+                     f"{float(np.median([r[1] for r in runs])):.0f} s | {hours:.2f} |")
+    lines.append(f"| all | {sum(len(r) for r in budgets.values())} | | | {total:.2f} |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="what", required=True)
@@ -183,6 +230,9 @@ def main(argv: list[str] | None = None) -> int:
     p = sub.add_parser("curves", help="learning curves across seeds")
     p.add_argument("models", type=Path, help="folder of METHOD-seedS-curve.csv")
     p.add_argument("--out", type=Path, default=OUT)
+    p = sub.add_parser("budget", help="runs, env steps, wall time and CPU-hours per method")
+    p.add_argument("models", type=Path, help="folder of the runs' METHOD-seedS.json records")
+    p.add_argument("--out", type=Path, default=OUT)
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     if args.what == "profile":
@@ -191,6 +241,10 @@ def main(argv: list[str] | None = None) -> int:
         (args.out / "improvement.md").write_text(improvement_table(scores, suites),
                                                  encoding="utf-8")
         print(f"wrote {args.out / 'profile.png'} and {args.out / 'improvement.md'}")
+    elif args.what == "budget":
+        table = budget_table(read_budgets(args.models))
+        (args.out / "budget.md").write_text(table, encoding="utf-8")
+        print(table, end="")
     else:
         draw_curves(read_curves(args.models), args.out / "curves.png")
         print(f"wrote {args.out / 'curves.png'}")

@@ -94,3 +94,23 @@ def test_curves_give_the_median_and_quartiles_of_the_seeds(rl_figures, tmp_path)
     assert np.isnan(med[0])                                     # before every run's first point
     rl_figures.draw_curves(curves, tmp_path / "curves.png")
     assert (tmp_path / "curves.png").stat().st_size > 10_000
+
+
+def test_budget_sums_wall_seconds_times_threads_per_method(rl_figures, tmp_path):
+    def sb3(method, seed, wall, threads=1):
+        (tmp_path / f"{method}-seed{seed}.json").write_text(json.dumps(
+            {"method": method, "budget": {"steps": 1000, "wall_seconds": wall, "threads": threads}}))
+
+    sb3("ppo-history", 0, 1800.0)
+    sb3("ppo-history", 1, 3600.0, threads=2)
+    (tmp_path / "ars-history-seed0.json").write_text(json.dumps(
+        {"method": "ars-history", "training": {"budget": {"steps": 500}, "wall_seconds": 360.0}}))
+    (tmp_path / "ppo-history-seed0-curve.csv").write_text("env_steps\n1\n")   # not a record
+    budgets = rl_figures.read_budgets(tmp_path)
+    assert budgets == {"ars-history": [(500, 360.0, 1)],
+                       "ppo-history": [(1000, 1800.0, 1), (1000, 3600.0, 2)]}
+    table = rl_figures.budget_table(budgets)
+    # 1800 s × 1 + 3600 s × 2 = 2.5 CPU-hours; 360 s = 0.1; all 2.6
+    assert "| `ppo-history` | 2 | 1,000 | 2700 s | 2.50 |" in table
+    assert "| `ars-history` | 1 | 500 | 360 s | 0.10 |" in table
+    assert table.rstrip().endswith("| all | 3 | | | 2.60 |")
