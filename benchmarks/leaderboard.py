@@ -1,7 +1,7 @@
 """Score every leaderboard entry on all suites and regenerate the Leaderboard page's table.
 
     uv run python benchmarks/leaderboard.py                  # built-ins, plug-ins, Gymnasium agents
-    python benchmarks/leaderboard.py --rl                    # + the RL models (the rl extra)
+    python benchmarks/leaderboard.py --rl                    # the RL models (the rl extra)
     uv run pendulum-lqg board docs/leaderboard/scores --out docs/leaderboard/board.md
 
 Each entry's file is exactly what ``pendulum-lqg score ENTRY --suite all --out FILE`` writes (the
@@ -32,8 +32,25 @@ PLUGINS = {"plugin_lqg": "experiments/plugin_lqg.py:make",
 AGENTS = {"agent_LQGAgent": "pendulum_lqg.scoreboard.episodes:reference_agent",
           "agent_python_control_lqg": "experiments/agents/python_control_lqg.py:make",
           "agent_zero_force": "experiments/agents/zero_force.py:make"}
-#: RL models trained by benchmarks/train_agents.py (scored with --rl).
+#: The first board's RL models (scored with --rl, beside every run ``METHOD-seedS`` of
+#: benchmarks/train_agents.py and benchmarks/train_linear.py that the models folder holds).
 MODELS = ("ppo-lecture", "recurrentppo-lecture", "sac-lecture", "ppo-full-state")
+
+
+def rl_entries(models: Path) -> list[tuple[str, dict]]:
+    """``(score file stem, score_entry keywords)`` of every RL model: the first board's four, then
+    each training run — an SB3 zip, or a linear controller file (a ``.json`` without a zip
+    beside it). Runs of the noise ladder (``METHOD-noiseX-seedS``) are not board entries: they
+    are scored at their own noise by benchmarks/noise_ladder.py."""
+    out = [(f"rl_{m}", {"agent": f"sb3:{(models / f'{m}.zip').relative_to(ROOT)}"}) for m in MODELS]
+    for path in sorted(models.glob("*-seed*.*")):
+        if "-noise" in path.stem or path.name.endswith("-curve.csv"):
+            continue
+        if path.suffix == ".zip":
+            out.append((f"rl_{path.stem}", {"agent": f"sb3:{path.relative_to(ROOT)}"}))
+        elif path.suffix == ".json" and not path.with_suffix(".zip").exists():
+            out.append((f"rl_{path.stem}", {"agent": f"linear:{path.relative_to(ROOT)}"}))
+    return out
 
 
 def main() -> None:
@@ -48,8 +65,7 @@ def main() -> None:
     cache: dict = {}
     entries: list[tuple[str, dict]] = []
     if args.rl:
-        entries += [(f"rl_{m}", {"agent": f"sb3:{(args.models / f'{m}.zip').relative_to(ROOT)}"})
-                    for m in MODELS]
+        entries += rl_entries(args.models)
     else:
         entries += [(p, {"policy": p}) for p in BUILTINS]
         entries += [(f, {"policy": ref}) for f, ref in PLUGINS.items()]
