@@ -6,7 +6,9 @@ Reads the same score files as ``pendulum-lqg board docs/leaderboard/scores`` (th
 ``board.md``) and keeps, per suite, the success rate and the optimality gap (its interval stays in
 the full table). A suite's cell is filled only for the scores made on the board's version of that
 suite (its most common fingerprint), as in the full table. The figure is the same data as a
-colour map (success rate), written with matplotlib's object API.
+colour map (success rate), written with matplotlib's object API. A training run (a score file
+with a ``method`` and a ``seed``) is not a row: ``board``'s methods table aggregates the runs of
+each method.
 """
 
 from __future__ import annotations
@@ -32,6 +34,8 @@ def summary_cells(scores: list[tuple[Path, dict[str, Any]]],
               .most_common(1)[0][0] for s in suites}
     rows: list[tuple[str, list[tuple[float, float | None] | str]]] = []
     for _, d in sorted(scores, key=lambda item: item[1]["policy"]):
+        if d.get("method") is not None and d.get("seed") is not None:
+            continue                         # a training run: the methods table aggregates it
         cells: list[tuple[float, float | None] | str] = []
         for s in suites:
             e = d["suites"].get(s)
