@@ -392,18 +392,17 @@ def _grid_point(values: dict[str, Any], base: dict[str, dict[str, Any]],
 
 def _model_file(value: object, base_dir: Path | None) -> str | None:
     """``model_file`` as an absolute path (relative to the experiment file's folder, else the
-    current folder), checked to exist."""
+    current folder: :func:`~pendulum_lqg.util.resources.find_file`), checked to exist."""
+    from pendulum_lqg.util.resources import find_file
+
     if value is None:
         return None
     if not isinstance(value, str) or not value:
         raise ConfigError(f"model_file: expected a path to an MJCF file, got {value!r}")
-    path = Path(value).expanduser()
-    if not path.is_absolute():
-        near = base_dir / path if base_dir is not None else None
-        path = near if near is not None and near.is_file() else Path.cwd() / path
+    path = find_file(value, base_dir)
     if not path.is_file():
         raise ConfigError(f"model_file: no file {value!r}")
-    return str(path.resolve())
+    return str(path)
 
 
 def _located(exc: PendulumLQGError, base: dict[str, dict[str, Any]],
@@ -510,12 +509,13 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
     """Load a shipped experiment by name (``lecture``) or a TOML file by path.
 
     A bare name (no suffix, no folder) is looked up among the shipped experiments first, then as
-    ``NAME.toml`` in the current folder; anything else is a path. ``episodes``, ``seed`` and
+    ``NAME.toml`` in the current folder; anything else is a path (the current folder's, else the
+    shipped copy: :func:`~pendulum_lqg.util.resources.find_file`). ``episodes``, ``seed`` and
     ``model_file`` replace the file's (``bench --episodes/--seed/--model``; as
     :meth:`ExperimentSpec.with_overrides`, but the file is validated once, with them).
     """
     from pendulum_lqg.boundary import read_toml
-    from pendulum_lqg.util.resources import experiment_names, experiment_path
+    from pendulum_lqg.util.resources import experiment_names, experiment_path, find_file
 
     path = Path(name_or_path)
     if not path.suffix and len(path.parts) == 1:
@@ -524,6 +524,8 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
             path = shipped
         elif Path(f"{name_or_path}.toml").is_file():
             path = Path(f"{name_or_path}.toml")
+    elif not path.is_file():
+        path = find_file(path)          # experiments/NAME.toml from an installed package
     if not path.is_file():
         raise ConfigError(f"experiment: no file {name_or_path!r}; known experiments: "
                           + ", ".join(experiment_names()))
