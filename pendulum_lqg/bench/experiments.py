@@ -430,6 +430,28 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     ``base_dir`` is the folder relative plugin files (``policy = ["my_ctrl.py:make"]``) are taken
     from: the experiment file's own folder (then the current folder).
     """
+    from pendulum_lqg.bench.lti import check_lti_experiment, lti_file
+
+    base = _checked_tables(data)
+    grid = _checked_grid(data.get("grid", {}))
+    study, study_params = _study(data)
+    model_file = _model_file(data.get("model_file"), base_dir)
+    lti = lti_file(data.get("lti_file"), base_dir)
+    if lti is not None:
+        check_lti_experiment(data)
+    episodes = _as_int("episodes", data.get("episodes", 100), 1)
+    seed = _as_int("seed", data.get("seed", 0), 0)
+    chunk = _as_int("chunk", data.get("chunk", 250), 1)
+    configs = _configurations(grid, base, episodes, base_dir, model_file=model_file, lti=lti)
+    return ExperimentSpec(name=str(data.get("name", name)), description=str(
+        data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,
+        configurations=tuple(configs), source=dict(data),
+        study=study, study_params=study_params, base_dir=base_dir)
+
+
+def _checked_tables(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """The top-level keys and those of the ``[scenario]``, ``[noise]``, ``[design]`` and
+    ``[model]`` tables checked, ``name`` and ``description`` too: copies of the four tables."""
     check_keys("experiment", data, TOP_KEYS)
     for table, known in (("scenario", SCENARIO_KEYS), ("noise", NOISE_KEYS),
                          ("design", DESIGN_KEYS), ("model", MODEL_KEYS)):
@@ -441,7 +463,12 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
             raise ConfigError(f"{key}: expected a string, got {data[key]!r}")
     if "name" in data:
         check_name(str(data["name"]))
-    grid = data.get("grid", {})
+    return base
+
+
+def _checked_grid(grid: dict[str, Any]) -> dict[str, Any]:
+    """``[grid]``: known keys, non-empty lists, built-in controller and observer names, and
+    ``delay`` with ``delay_kind``."""
     check_keys("grid", grid, GRID_KEYS)
     for key, values in grid.items():
         if not isinstance(values, list) or not values:
@@ -459,6 +486,12 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     if ("delay" in grid) != ("delay_kind" in grid):
         raise ConfigError("grid.delay: give delay and delay_kind together (delay_kind = "
                           "['measurement', 'actuator'] says which delay the values set)")
+    return grid
+
+
+def _study(data: dict[str, Any]) -> tuple[str | None, dict[str, Any]]:
+    """``study`` and its parameter table (defaults filled in); a study's table without
+    ``study`` naming it is refused."""
     study = data.get("study")
     study_params: dict[str, Any] = {}
     if study is not None:
@@ -468,18 +501,18 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     for other in STUDIES:
         if other in data and other != study:
             raise ConfigError(f"{other}: a [{other}] table needs study = {other!r}")
-    model_file = _model_file(data.get("model_file"), base_dir)
-    from pendulum_lqg.bench.lti import check_lti_experiment, lti_file
+    return (None if study is None else str(study)), study_params
 
-    lti = lti_file(data.get("lti_file"), base_dir)
-    if lti is not None:
-        check_lti_experiment(data)
-    episodes = _as_int("episodes", data.get("episodes", 100), 1)
-    seed = _as_int("seed", data.get("seed", 0), 0)
-    chunk = _as_int("chunk", data.get("chunk", 250), 1)
-    keys = list(grid)
+
+def _configurations(grid: dict[str, Any], base: dict[str, dict[str, Any]], episodes: int,
+                    base_dir: Path | None, *, model_file: str | None, lti: str | None,
+                    ) -> list[Configuration]:
+    """Every point of the grid (the Cartesian product of its lists, in the file's key order) as
+    a validated configuration, their number and rows checked against the ceilings first; an
+    error names the key (``design.R``) and the grid point."""
     from pendulum_lqg.util.limits import MAX_CONFIGURATIONS, check_at_most
 
+    keys = list(grid)
     n_configs = math.prod(len(grid[k]) for k in keys)
     check_at_most("grid", n_configs, MAX_CONFIGURATIONS,
                   "configurations, each validated before the first unit runs")
@@ -498,10 +531,7 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
         except PendulumLQGError as exc:
             raise _located(exc, base, values) from exc
         configs.append(cfg)
-    return ExperimentSpec(name=str(data.get("name", name)), description=str(
-        data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,
-        configurations=tuple(configs), source=dict(data),
-        study=None if study is None else str(study), study_params=study_params, base_dir=base_dir)
+    return configs
 
 
 def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | None = None,
