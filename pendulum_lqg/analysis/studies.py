@@ -80,7 +80,7 @@ def _csv(rows: list[dict[str, object]]) -> str:
     return rows_to_csv(rows)
 
 
-def _g(v: object) -> str:
+def _cell(v: object) -> str:
     if isinstance(v, float):
         if not np.isfinite(v):
             return "∞" if v > 0 else ("nan" if v != v else "−∞")
@@ -265,14 +265,14 @@ def margins_markdown(summary: dict[str, Any]) -> str:
              f"transmission zeros of y = [p, θ]: {_zeros_text(z['transmission_zeros_y=[p,θ]'])}.",
              "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in summary["loops"]:
-        lines.append("| " + " | ".join([r["loop"], str(r["closed_loop_stable"])] + [_g(r[k]) for k in (
+        lines.append("| " + " | ".join([r["loop"], str(r["closed_loop_stable"])] + [_cell(r[k]) for k in (
             "min_return_difference", "gain_margin_lower", "gain_margin_upper", "phase_margin_deg",
             "disk_margin", "disk_gain_margin", "disk_phase_margin_deg")]) + " |")
     lines += ["", "Loop transfer recovery: W = q²BBᵀ, V fixed (continuous Kalman–Bucy + LQR).", "",
               "| measurement | q | recovery error | min abs(1+L) | GM lower | GM upper | PM [deg] | "
               "disk margin α |", "|---|---|---|---|---|---|---|---|"]
     for r in summary["ltr"]:
-        lines.append("| " + " | ".join([r["measurement"]] + [_g(r[k]) for k in (
+        lines.append("| " + " | ".join([r["measurement"]] + [_cell(r[k]) for k in (
             "q", "recovery_error", "min_return_difference", "gain_margin_lower",
             "gain_margin_upper", "phase_margin_deg", "disk_margin")]) + " |")
     return "\n".join(lines) + "\n"

@@ -279,19 +279,13 @@ class ExperimentSpec:
     def definition_fingerprint(self) -> str:
         """Hash of the resolved spec and of a custom model file's bytes, without the plugins'
         sources: a resumed sweep must have the same one (the units whose plugin changed since
-        are then stale, see :meth:`plugin_source`)."""
+        are then stale, see :attr:`Configuration.plugin_source`)."""
         blob = json.dumps(self.source, sort_keys=True, default=str).encode()
         first = self.configurations[0] if self.configurations else None
         for file in (first.model_file, first.lti_file) if first is not None else ():
             if file is not None:
                 blob += Path(file).read_bytes()
         return hashlib.sha256(blob).hexdigest()[:16]
-
-    @staticmethod
-    def plugin_source(cfg: Configuration) -> str | None:
-        """SHA-256 of ``cfg``'s plugin source (``None`` for a built-in policy): a unit written
-        with another one is stale."""
-        return cfg.plugin_source
 
 
 @dataclass(frozen=True)

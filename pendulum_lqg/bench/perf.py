@@ -22,10 +22,10 @@
 
 Bare physics and the closed loop alternate ``repeats`` times; the ratio is the median of the
 per-pair ratios, so a slow spell of the machine affects both sides of a pair. Each timed call
-starts after a full garbage collection (``gc.collect()``): a collection of the whole heap, which
-the objects of earlier calls would otherwise trigger inside whichever call came next, takes
-~55 ms here (2–3 % of a closed-loop run); each call still pays for the collections its own
-allocations cause.
+starts after a full garbage collection (``gc.collect()``), as ``timeit`` disables collection: a
+collection of the whole heap, which the objects of earlier calls would otherwise trigger inside
+whichever call came next, would be charged to that call (docs/performance.md, "Settings that rest
+on a measurement"); each call still pays for the collections its own allocations cause.
 """
 
 from __future__ import annotations
@@ -47,8 +47,9 @@ from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.model.plant import load_plant, steps_per_period
 from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
-#: Fewest physics steps a rollout chunk (one thread-pool task) should hold: smaller chunks cost
-#: more in hand-offs than they win in load balance (measured with 64 and 1024 rows).
+#: Fewest physics steps a rollout chunk (one thread-pool task) should hold: each chunk costs a
+#: hand-off to a thread, and below this the hand-offs cost more than the load balance of more
+#: chunks wins (docs/performance.md, "Settings that rest on a measurement").
 MIN_CHUNK_STEPS = 300
 
 

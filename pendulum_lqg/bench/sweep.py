@@ -21,6 +21,7 @@ gives each unit the last digits of the machine that ran it (docs: Concepts, repr
 
 from __future__ import annotations
 
+import contextlib
 import os
 import platform
 import signal
@@ -178,7 +179,7 @@ def _run_units(executor: Executor, todo: list[WorkUnit], folder: ResultsDir,
     Ctrl-C or SIGTERM stops the run (:class:`SweepInterrupted`); the executor is closed either
     way."""
     failures: list[UnitFailure] = []
-    with terminate_as_interrupt():
+    with sigterm_as_interrupt():
         try:
             for unit, rows, error in _with_progress(executor.run(todo), todo, total,
                                                     total - len(todo), progress, log):
@@ -193,19 +194,23 @@ def _run_units(executor: Executor, todo: list[WorkUnit], folder: ResultsDir,
     return failures
 
 
-class terminate_as_interrupt:
-    """SIGTERM raises KeyboardInterrupt while a sweep runs (main thread only)."""
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM raises KeyboardInterrupt (as Ctrl-C does), so a sweep stopped by
+    ``kill`` keeps its finished units and releases its lock; the previous handler is restored on
+    leaving. Only the main thread may install signal handlers: elsewhere nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
 
-    def __enter__(self) -> None:
-        self._old = None
-        if threading.current_thread() is threading.main_thread():
-            def _raise(signum: int, frame: object) -> None:
-                raise KeyboardInterrupt
-            self._old = signal.signal(signal.SIGTERM, _raise)
+    def _raise(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
 
-    def __exit__(self, *exc: object) -> None:
-        if self._old is not None:
-            signal.signal(signal.SIGTERM, self._old)
+    old = signal.signal(signal.SIGTERM, _raise)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
 
 
 Outcome = tuple[WorkUnit, list[dict[str, Any]] | None, str | None]

@@ -47,7 +47,7 @@ class BatchResult:
     shard_seconds: list[tuple[float, float]] = field(default_factory=list)
 
 
-class _FixedBatch:
+class _WholeBatch:
     """A policy without ``select``: it keeps its whole original batch; rows of ended episodes get
     zero measurements and their forces are dropped."""
 
@@ -185,9 +185,10 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: i
             policy.reset(n)
         members = optional_members(policy)
         needs_state = members.needs_state
-        # without select, keep feeding the whole batch and use only the running rows
-        driven = (cast(SelectablePolicyProtocol, policy) if members.select is not None
-                  else _FixedBatch(policy, n))
+        # the policy as the loop drives it, on the running rows: itself when it selects them,
+        # else fed the whole batch with only the running rows used
+        loop_policy = (cast(SelectablePolicyProtocol, policy) if members.select is not None
+                       else _WholeBatch(policy, n))
         # the estimator's rows are the running ones only when the policy selects them
         estimator = members.estimator if members.select is not None else None
         for _ in range(sim.n_periods):
@@ -195,8 +196,8 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: i
                 raise _Cancelled
             y = sim.measure()
             x_now = sim.x
-            u = driven.act(x_now if needs_state else y)
-            x_hat = current_estimate(driven)
+            u = loop_policy.act(x_now if needs_state else y)
+            x_hat = current_estimate(loop_policy)
             if log is not None:
                 snap = dict(t=sim.t, x=x_now, y=y, **estimator_snapshot(estimator, x_hat, sim.n,
                                                                         sim.nx, sim.layout.p))
@@ -207,7 +208,7 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: i
             if res.failed.any():
                 keep = np.nonzero(~res.failed)[0]
                 sim.select(keep)
-                driven.select(keep)
+                loop_policy.select(keep)
                 if keep.size == 0:
                     break
         assert sim.metrics is not None
