@@ -26,11 +26,6 @@ PLUGINS = HERE / "plugins" / "lqg_plugins.py"
 EXAMPLES = data_dir("experiments")
 
 
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant()
-
-
 def _same(a, b) -> bool:
     """Rows equal to the last bit (nan included)."""
     return json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)

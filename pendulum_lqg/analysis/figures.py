@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -94,93 +95,137 @@ def _legend_outside(fig: Any, ax: Any) -> None:
         fig.legend(handles, labels, loc="center left", bbox_to_anchor=(1.0, 0.5), frameon=False)
 
 
+#: Markers of the series, in order (a series past the last one takes a dashed line as well).
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+
+
+@dataclass(frozen=True)
+class _Sweep:
+    """A grid's rows as the figures see them: curves against the sweep key ``x``, one panel per
+    value of the other swept keys (``facets``), one curve per series."""
+
+    rows: list[dict[str, Any]]
+    x: str
+    facets: list[str]
+    series: list[str]
+
+    @property
+    def facet_values(self) -> list[tuple]:
+        return sorted({tuple(r[k] for k in self.facets) for r in self.rows})
+
+    def panel_rows(self, values: tuple) -> list[dict[str, Any]]:
+        return [r for r in self.rows if tuple(r[k] for k in self.facets) == values]
+
+    def panels(self, mk: Figures, **kw: Any) -> tuple[Any, Any]:
+        """A figure with one axes per facet value, two columns at most; the spare ones hidden."""
+        n = len(self.facet_values)
+        ncol = min(n, 2)
+        nrow = -(-n // ncol)
+        fig, axes = mk.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.2 * nrow), squeeze=False, **kw)
+        for ax in list(axes.flat)[n:]:
+            ax.set_visible(False)
+        return fig, axes
+
+    def title(self, values: tuple) -> str:
+        return ", ".join(f"{k} = {v}" for k, v in zip(self.facets, values, strict=True))
+
+
 def grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], mk: Figures,
                   ) -> list[tuple[str, str]]:
+    """The figures of a grid's results folder: mismatch and delay grids have their own; a grid
+    that sweeps a numeric key gets the success rate against it (and the cost against the control
+    period, the estimation error against the noise scale); every grid its cost distributions."""
     rows = read_rows(folder)
     grid = src.get("grid", {})
     varying = [k for k, v in grid.items() if isinstance(v, list) and len(v) > 1]
     sweeps = [k for k in SWEEP_KEYS if k in varying]
     series = [k for k in SERIES_KEYS if k in varying] or ["config"]
-    figs: list[tuple[str, str]] = []
     if {"pole_mass_scale", "pole_length_scale"} <= set(sweeps):
         return _mismatch_figures(rows, out, name, series, mk)
     if "delay" in grid and "delay_kind" in grid:
         return _delay_figures(rows, out, name, series, mk)
     if not sweeps:
-        figs.append(("cost distributions", _cost_boxes(rows, out, name, series, None, mk)))
-        return figs
+        return [("cost distributions", _cost_boxes(rows, out, name, series, None, mk))]
     x = max(sweeps, key=lambda k: len(grid[k]))
-    facets = [k for k in sweeps if k != x]
-    facet_vals = sorted({tuple(r[k] for k in facets) for r in rows})
-    ncol = min(len(facet_vals), 2)
-    nrow = -(-len(facet_vals) // ncol)
-    fig, axes = mk.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.2 * nrow), squeeze=False,
-                             sharey=True)
-    markers = ["o", "s", "^", "D", "v", "P", "X", "*"]
-    for ax, fv in zip(axes.flat, facet_vals, strict=False):
-        sub = [r for r in rows if tuple(r[k] for k in facets) == fv]
-        for i, (key, grp) in enumerate(sorted(_group(sub, series).items())):
+    sweep = _Sweep(rows, x, [k for k in sweeps if k != x], series)
+    figs = [(f"success rate vs {x}", _success_figure(sweep, out, name, mk))]
+    if x == "control_period":
+        figs.append(("cost vs control period", _cost_vs_period_figure(sweep, out, name, mk)))
+    has_est = any(np.isfinite(float(r["rms_est_err_theta"])) and float(r["rms_est_err_theta"]) > 0
+                  for r in rows)
+    if has_est and x == "noise_scale":
+        figs.append(("estimation error per state", _estimation_error_figure(sweep, out, name, mk)))
+    nominal = 1.0 if x == "noise_scale" else None
+    figs.append(("cost distributions", _cost_boxes(rows, out, name, series + sweep.facets,
+                                                   (x, nominal), mk)))
+    return figs
+
+
+def _success_figure(sweep: _Sweep, out: Path, name: str, mk: Figures) -> str:
+    """Success rate against the sweep key with its 95 % Wilson band, a panel per facet value."""
+    x = sweep.x
+    fig, axes = sweep.panels(mk, sharey=True)
+    for ax, fv in zip(axes.flat, sweep.facet_values, strict=False):
+        sub = sweep.panel_rows(fv)
+        for i, (key, grp) in enumerate(sorted(_group(sub, sweep.series).items())):
             xs, rate, lo, hi = _success_curve(grp, x)
-            line, = ax.plot(xs, rate, marker=markers[i % len(markers)], ms=5,
-                            ls=["-", "--", "-.", ":"][i // len(markers) % 4] if i >= 4 else "-",
+            line, = ax.plot(xs, rate, marker=MARKERS[i % len(MARKERS)], ms=5,
+                            ls=["-", "--", "-.", ":"][i // len(MARKERS) % 4] if i >= 4 else "-",
                             label=" ".join(map(str, key)))
             ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.08, lw=0)
         ax.set_xlabel(LABELS.get(x, x))
         ax.set_ylim(-0.03, 1.03)
         if x in LOG_KEYS:
             _log_x(ax, [float(r[x]) for r in sub])
-        if facets:
-            ax.set_title(", ".join(f"{k} = {v}" for k, v in zip(facets, fv, strict=True)))
-    for ax in list(axes.flat)[len(facet_vals):]:
-        ax.set_visible(False)
+        if sweep.facets:
+            ax.set_title(sweep.title(fv))
+    return _finish_panels(fig, axes, "success rate\n(95 % Wilson band)",
+                          f"{name}: success rate vs {x}", out, f"{name}_success_vs_{x}.png")
+
+
+def _cost_vs_period_figure(sweep: _Sweep, out: Path, name: str, mk: Figures) -> str:
+    """Mean cost of the successful episodes against the control period, a panel per facet."""
+    x = sweep.x
+    fig, axes = sweep.panels(mk)
+    for ax, fv in zip(axes.flat, sweep.facet_values, strict=False):
+        for i, (key, grp) in enumerate(sorted(_group(sweep.panel_rows(fv),
+                                                     sweep.series).items())):
+            xs, m, _ = _metric_curve(grp, x, "cost", successes_only=True)
+            ax.plot(xs, m, marker=MARKERS[i % len(MARKERS)], ms=5, label=" ".join(map(str, key)))
+        ax.set_yscale("log")
+        ax.set_xlabel(LABELS[x])
+        ax.set_title(sweep.title(fv))
+    return _finish_panels(fig, axes, "mean cost J\n(successful episodes)",
+                          f"{name}: cost vs control period", out, f"{name}_cost_vs_T.png")
+
+
+def _finish_panels(fig: Any, axes: Any, ylabel: str, title: str, out: Path, file: str) -> str:
+    """The y label on each row's first panel, the legend outside, the title; saved as ``file``."""
     for row in axes:
-        row[0].set_ylabel("success rate\n(95 % Wilson band)")
+        row[0].set_ylabel(ylabel)
     _legend_outside(fig, axes.flat[0])
-    fig.suptitle(f"{name}: success rate vs {x}")
-    figs.append((f"success rate vs {x}", save(fig, out, f"{name}_success_vs_{x}.png")))
+    fig.suptitle(title)
+    return save(fig, out, file)
 
-    if x == "control_period":
-        fig, axes = mk.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.2 * nrow), squeeze=False)
-        for ax, fv in zip(axes.flat, facet_vals, strict=False):
-            sub = [r for r in rows if tuple(r[k] for k in facets) == fv]
-            for i, (key, grp) in enumerate(sorted(_group(sub, series).items())):
-                xs, m, _ = _metric_curve(grp, x, "cost", successes_only=True)
-                ax.plot(xs, m, marker=markers[i % len(markers)], ms=5,
+
+def _estimation_error_figure(sweep: _Sweep, out: Path, name: str, mk: Figures) -> str:
+    """RMS estimation error of each state against the noise scale (all episodes, mean ± SE)."""
+    x, rows = sweep.x, sweep.rows
+    fig, axes = mk.subplots(2, 2, figsize=(12, 8))
+    for ax, (metric, label) in zip(axes.flat, EST_STATES, strict=True):
+        for key, grp in sorted(_group(rows, sweep.series).items()):
+            xs, m, se = _metric_curve(grp, x, metric, successes_only=False)
+            if not np.any(m > 0):
+                continue          # true-state policies have no estimation error
+            ax.errorbar(xs, m, yerr=se, marker="o", ms=4, capsize=2,
                         label=" ".join(map(str, key)))
-            ax.set_yscale("log")
-            ax.set_xlabel(LABELS[x])
-            ax.set_title(", ".join(f"{k} = {v}" for k, v in zip(facets, fv, strict=True)))
-        for ax in list(axes.flat)[len(facet_vals):]:
-            ax.set_visible(False)
-        for row in axes:
-            row[0].set_ylabel("mean cost J\n(successful episodes)")
-        _legend_outside(fig, axes.flat[0])
-        fig.suptitle(f"{name}: cost vs control period")
-        figs.append(("cost vs control period", save(fig, out, f"{name}_cost_vs_T.png")))
-
-    has_est = any(np.isfinite(float(r["rms_est_err_theta"])) and float(r["rms_est_err_theta"]) > 0
-                  for r in rows)
-    if has_est and x == "noise_scale":
-        fig, axes = mk.subplots(2, 2, figsize=(12, 8))
-        for ax, (metric, label) in zip(axes.flat, EST_STATES, strict=True):
-            for key, grp in sorted(_group(rows, series).items()):
-                xs, m, se = _metric_curve(grp, x, metric, successes_only=False)
-                if not np.any(m > 0):
-                    continue          # true-state policies have no estimation error
-                ax.errorbar(xs, m, yerr=se, marker="o", ms=4, capsize=2,
-                            label=" ".join(map(str, key)))
-            _log_x(ax, [float(r[x]) for r in rows])
-            ax.set_yscale("log")
-            ax.set_xlabel(LABELS[x])
-            ax.set_title(f"RMS estimation error, {label}")
-        _legend_outside(fig, axes.flat[0])
-        fig.suptitle(f"{name}: estimation error per state (all episodes, mean ± SE)")
-        figs.append(("estimation error per state",
-                     save(fig, out, f"{name}_estimation_error.png")))
-    nominal = 1.0 if x == "noise_scale" else None
-    figs.append(("cost distributions", _cost_boxes(rows, out, name, series + facets,
-                                                   (x, nominal), mk)))
-    return figs
+        _log_x(ax, [float(r[x]) for r in rows])
+        ax.set_yscale("log")
+        ax.set_xlabel(LABELS[x])
+        ax.set_title(f"RMS estimation error, {label}")
+    _legend_outside(fig, axes.flat[0])
+    fig.suptitle(f"{name}: estimation error per state (all episodes, mean ± SE)")
+    return save(fig, out, f"{name}_estimation_error.png")
 
 
 #: The success rate a policy must reach to "tolerate" a delay.
@@ -353,12 +398,37 @@ def _mismatch_figures(rows: list[dict[str, Any]], out: Path, name: str, series: 
 
 # ---- margins -------------------------------------------------------------------------------------
 def margins_figures(folder: Path, out: Path, name: str, mk: Figures) -> list[tuple[str, str]]:
+    """The margins study's figures: Nyquist plots, loop transfer recovery, and the sampled loops'
+    margins against the control period."""
     from pendulum_lqg.bench.results import read_csv
 
-    nyq = read_csv(folder / "nyquist.csv")
+    figs = [("Nyquist: LQ vs LQG", _nyquist_figure(read_csv(folder / "nyquist.csv"), out, name,
+                                                    mk))]
+    ltr = read_csv(folder / "ltr.csv")
+    summ_path = folder / "summary.json"
+    loops_all = records(read_json(summ_path), "loops", summ_path, {
+        "loop": str, "phase_margin_deg": NUMBER, "min_return_difference": NUMBER,
+        "disk_margin": NUMBER, "control_period": NUMBER})
+    lq = next((r for r in loops_all if r["loop"].startswith("LQ (")), None)
+    if lq is None:
+        raise ConfigError(f"results: {summ_path}: key 'loops' has no 'LQ (…)' loop")
+    figs.append(("loop transfer recovery", _ltr_figure(ltr, lq, out, name, mk)))
+    loops: list[dict[str, Any]] = [r for r in loops_all if float(r["control_period"]) > 0]
+    for i, r in enumerate(loops):
+        field(r, "policy", str, summ_path, where=f"loops[{i}].")
+        field(r, "closed_loop_stable", bool, summ_path, where=f"loops[{i}].")
+        field(r, "discretization", str, summ_path, default="", where=f"loops[{i}].")
+    if loops:
+        figs.append(("sampled-loop margins vs T", _sampled_margins_figure(loops, out, name, mk)))
+    return figs
+
+
+def _nyquist_figure(nyq: list[dict[str, Any]], out: Path, name: str, mk: Figures) -> str:
+    """Nyquist plots at the plant input, continuous loops beside sampled ones, with the unit
+    circle about −1."""
     curves: dict[str, list[tuple[float, float]]] = {}
     for r in nyq:
-        curves.setdefault(str(r["loop"]), []).append((float(r["re"]), float(r["im"])))  # type: ignore[arg-type]
+        curves.setdefault(str(r["loop"]), []).append((float(r["re"]), float(r["im"])))
     t = np.linspace(0, 2 * np.pi, 400)
     fig, axes = mk.subplots(1, 2, figsize=(11, 5))
     cont = [k for k in curves if "continuous" in k or k.startswith("LTR")]
@@ -380,25 +450,21 @@ def margins_figures(folder: Path, out: Path, name: str, mk: Figures) -> list[tup
         ax.set_title(title)
         ax.legend(loc="lower left", fontsize=7)
     fig.suptitle(f"{name}: Nyquist plots at the plant input (ω > 0 bold, mirror thin)")
-    figs = [("Nyquist: LQ vs LQG", save(fig, out, f"{name}_nyquist.png"))]
+    return save(fig, out, f"{name}_nyquist.png")
 
-    ltr = read_csv(folder / "ltr.csv")
+
+def _ltr_figure(ltr: list[dict[str, Any]], lq: dict[str, Any], out: Path, name: str,
+                mk: Figures) -> str:
+    """Loop transfer recovery: phase margin, smallest return difference and disk margin against
+    q, per measurement, beside the LQ loop's values."""
     fig, axes = mk.subplots(1, 3, figsize=(13, 3.6))
+    keys = ("phase_margin_deg", "min_return_difference", "disk_margin")
     for meas in sorted({str(r["measurement"]) for r in ltr}):
         sub = [r for r in ltr if r["measurement"] == meas]
-        q = np.array([float(r["q"]) for r in sub])  # type: ignore[arg-type]
-        for ax, key in zip(axes, ("phase_margin_deg", "min_return_difference", "disk_margin"),
-                           strict=True):
-            ax.plot(q, [float(r[key]) for r in sub], marker="o", ms=3, label=meas)  # type: ignore[arg-type]
-    summ_path = folder / "summary.json"
-    summ = read_json(summ_path)
-    loops_all = records(summ, "loops", summ_path, {
-        "loop": str, "phase_margin_deg": NUMBER, "min_return_difference": NUMBER,
-        "disk_margin": NUMBER, "control_period": NUMBER})
-    lq = next((r for r in loops_all if r["loop"].startswith("LQ (")), None)
-    if lq is None:
-        raise ConfigError(f"results: {summ_path}: key 'loops' has no 'LQ (…)' loop")
-    for ax, key, title in zip(axes, ("phase_margin_deg", "min_return_difference", "disk_margin"),
+        q = np.array([float(r["q"]) for r in sub])
+        for ax, key in zip(axes, keys, strict=True):
+            ax.plot(q, [float(r[key]) for r in sub], marker="o", ms=3, label=meas)
+    for ax, key, title in zip(axes, keys,
                               ("phase margin [deg]", "min abs(1 + L(jω))", "disk margin α"),
                               strict=True):
         ax.axhline(float(lq[key]), color="k", ls="--", lw=1, label="LQ loop")
@@ -408,34 +474,32 @@ def margins_figures(folder: Path, out: Path, name: str, mk: Figures) -> list[tup
     axes[1].set_yscale("log")
     axes[0].legend(loc="best")
     fig.suptitle(f"{name}: loop transfer recovery")
-    figs.append(("loop transfer recovery", save(fig, out, f"{name}_ltr.png")))
+    return save(fig, out, f"{name}_ltr.png")
 
-    loops: list[dict[str, Any]] = [r for r in loops_all if float(r["control_period"]) > 0]
-    for i, r in enumerate(loops):
-        field(r, "policy", str, summ_path, where=f"loops[{i}].")
-        field(r, "closed_loop_stable", bool, summ_path, where=f"loops[{i}].")
-        field(r, "discretization", str, summ_path, default="", where=f"loops[{i}].")
-    if loops:
-        fig, axes = mk.subplots(1, 2, figsize=(10, 3.6))
 
-        def keyf(r: dict[str, Any]) -> tuple[str, str]:
-            return str(r["policy"]), str(r.get("discretization", ""))
+def _sampled_margins_figure(loops: list[dict[str, Any]], out: Path, name: str,
+                            mk: Figures) -> str:
+    """Phase and disk margins of the sampled loops against the control period, a curve per
+    policy and discretisation (blank where the loop is unstable)."""
+    fig, axes = mk.subplots(1, 2, figsize=(10, 3.6))
 
-        for group in sorted({keyf(r) for r in loops}):
-            members = sorted((r for r in loops if keyf(r) == group),
-                             key=lambda r: float(r["control_period"]))
-            T = [float(r["control_period"]) for r in members]
-            for ax, m in zip(axes, ("phase_margin_deg", "disk_margin"), strict=True):
-                vals = [float(r[m]) if r["closed_loop_stable"] else np.nan for r in members]
-                ax.plot(T, vals, marker="o", ms=3, label=" ".join(group))
-        for ax, title in zip(axes, ("phase margin [deg] (blank: unstable)", "disk margin α"),
-                             strict=True):
-            ax.set_xlabel("control period T [s]")
-            ax.set_title(title)
-        axes[1].legend(loc="best", fontsize=7)
-        fig.suptitle(f"{name}: margins of the sampled loops")
-        figs.append(("sampled-loop margins vs T", save(fig, out, f"{name}_sampled.png")))
-    return figs
+    def keyf(r: dict[str, Any]) -> tuple[str, str]:
+        return str(r["policy"]), str(r.get("discretization", ""))
+
+    for group in sorted({keyf(r) for r in loops}):
+        members = sorted((r for r in loops if keyf(r) == group),
+                         key=lambda r: float(r["control_period"]))
+        T = [float(r["control_period"]) for r in members]
+        for ax, m in zip(axes, ("phase_margin_deg", "disk_margin"), strict=True):
+            vals = [float(r[m]) if r["closed_loop_stable"] else np.nan for r in members]
+            ax.plot(T, vals, marker="o", ms=3, label=" ".join(group))
+    for ax, title in zip(axes, ("phase margin [deg] (blank: unstable)", "disk margin α"),
+                         strict=True):
+        ax.set_xlabel("control period T [s]")
+        ax.set_title(title)
+    axes[1].legend(loc="best", fontsize=7)
+    fig.suptitle(f"{name}: margins of the sampled loops")
+    return save(fig, out, f"{name}_sampled.png")
 
 
 # ---- region of attraction ------------------------------------------------------------------------

@@ -283,14 +283,14 @@ def loop_margins(loop: control.StateSpace, omega: ArrayLike) -> MarginReport:
     rd = np.abs(1.0 + Lw)
     i = int(np.argmin(rd))
     upper, lower, phase, w_c = _crossings(loop, omega, Lw)
-    dm, dgm, dpm = control.disk_margins(loop, omega, skew=0.0)
-    dm = float(np.min(dm))
+    disk, dgm, dpm = control.disk_margins(loop, omega, skew=0.0)
+    disk = float(np.min(disk))
     dgm_factor = float(10 ** (float(np.min(dgm)) / 20)) if np.isfinite(np.min(dgm)) else float("inf")
     return MarginReport(
         closed_loop_stable=closed_loop_stable(loop), min_return_difference=float(rd[i]),
         omega_min_return_difference=float(omega[i]), gain_margin_upper=upper,
         gain_margin_lower=lower, phase_margin_deg=phase, omega_crossover=w_c,
-        disk_margin=dm, disk_gain_margin=dgm_factor, disk_phase_margin_deg=float(np.min(dpm)))
+        disk_margin=disk, disk_gain_margin=dgm_factor, disk_phase_margin_deg=float(np.min(dpm)))
 
 
 # ---- zeros ---------------------------------------------------------------------------------------

@@ -80,7 +80,7 @@ def _csv(rows: list[dict[str, object]]) -> str:
     return rows_to_csv(rows)
 
 
-def _g(v: object) -> str:
+def _cell(v: object) -> str:
     if isinstance(v, float):
         if not np.isfinite(v):
             return "∞" if v > 0 else ("nan" if v != v else "−∞")
@@ -135,8 +135,7 @@ def run_margins(spec: Any, out: Any, *, log: Log = None) -> dict[str, object]:
     sampled loop at its period."""
     from pendulum_lqg import design
     from pendulum_lqg.analysis import margins as M
-    from pendulum_lqg.model.linearize import discretize_zoh, linearize
-    from pendulum_lqg.policies.lqg import design_policy
+    from pendulum_lqg.model.linearize import linearize
 
     prm = spec.study_params
     plugins = [cfg.values.get("policy") for cfg in spec.configurations if cfg.plugin is not None]
@@ -162,24 +161,60 @@ def run_margins(spec: Any, out: Any, *, log: Log = None) -> dict[str, object]:
         rows.append({"loop": name, "policy": name.split(" (")[0], "control_period": 0.0,
                      **M.loop_margins(loop, w).to_dict()})
         nyq += _nyquist_rows(name, loop, w_plot)
-    qs = [float(q) for q in prm["q"]]
-    ltr_rows: list[dict[str, object]] = []
+    ltr_rows, ltr_nyq = _ltr(lin, lqr.K, V, [float(q) for q in prm["q"]], w, w_plot, log)
+    sampled, sampled_nyq = _sampled_loops(spec, plant, lin, scenario0.control_period, log)
+    summary = {"experiment": spec.name, "study": "margins", "seed": spec.seed,
+               "params": prm, "K_lqr": lqr.K, "L_kalman_bucy": kb.L, "zeros": _zeros(A, B, C),
+               "loops": rows + sampled, "ltr": ltr_rows}
+    _write(out, "summary.json", _json(summary))
+    _write(out, "margins.csv", _csv(_uniform(rows + sampled)))
+    _write(out, "ltr.csv", _csv(ltr_rows))
+    _write(out, "nyquist.csv", _csv(nyq + ltr_nyq + sampled_nyq))
+    _write(out, "summary.md", margins_markdown(summary))
+    return summary
+
+
+def _ltr(lin: Any, K: np.ndarray, V: np.ndarray, qs: list[float], w: np.ndarray,
+         w_plot: np.ndarray, log: Log) -> tuple[list[dict[str, object]], list[dict[str, object]]]:
+    """Loop transfer recovery (W = q²BBᵀ, V fixed) measuring y = [p, θ] and y = p: a row of
+    margins per measurement and q, and the Nyquist rows of the smallest, middle and largest q
+    with y = [p, θ]."""
+    from pendulum_lqg import design
+    from pendulum_lqg.analysis import margins as M
+
+    A, B, C = lin.A, lin.B, lin.C
+    rows: list[dict[str, object]] = []
     for label, Cm, Vm in (("y=[p,θ]", C, V), ("y=p", C[:1], V[:1, :1])):
-        for pt in M.ltr_sweep(A, B, Cm, lqr.K, Vm, qs, omega=w):
-            ltr_rows.append({"measurement": label, "q": pt.q, "recovery_error": pt.recovery_error,
-                             **pt.margins.to_dict()})
+        for pt in M.ltr_sweep(A, B, Cm, K, Vm, qs, omega=w):
+            rows.append({"measurement": label, "q": pt.q, "recovery_error": pt.recovery_error,
+                         **pt.margins.to_dict()})
         if log:
             log(f"LTR {label}: q = {qs[0]:g} … {qs[-1]:g}")
+    nyq: list[dict[str, object]] = []
     for q in (qs[0], qs[len(qs) // 2], qs[-1]):
         kf = design.kalman(A, np.eye(4), C, q * q * (B @ B.T), V)
         nyq += _nyquist_rows(f"LTR q={q:g}", M.loop_through(
-            M.lqg_compensator(A, B, C, lqr.K, kf.L), M.plant(A, B, C)), w_plot)
+            M.lqg_compensator(A, B, C, K, kf.L), M.plant(A, B, C)), w_plot)
+    return rows, nyq
+
+
+def _sampled_loops(spec: Any, plant: Any, lin: Any, T0: float, log: Log,
+                   ) -> tuple[list[dict[str, object]], list[dict[str, object]]]:
+    """Each configuration's sampled loop (its policy on the exact ZOH plant at its period): a row
+    of margins each, and the Nyquist rows of those at the first configuration's period ``T0``."""
+    from pendulum_lqg.analysis import margins as M
+    from pendulum_lqg.model.linearize import discretize_zoh
+    from pendulum_lqg.policies.lqg import design_policy
+
+    prm = spec.study_params
+    rows: list[dict[str, object]] = []
+    nyq: list[dict[str, object]] = []
     for cfg in spec.configurations:
         scenario, dspec = cfg.build()
         T = scenario.control_period
         policy = design_policy(plant, T, scenario.noise, dspec, linear=lin)
         zoh = discretize_zoh(lin, T)
-        loop = policy_loop(policy, zoh.Phi, zoh.Gamma, C, T)
+        loop = policy_loop(policy, zoh.Phi, zoh.Gamma, lin.C, T)
         wd = M.frequency_grid(lo=prm["omega_min"], hi=prm["omega_max"], n=prm["n_omega"], dt=T)
         name = f"{policy.name} ({dspec.discretization}, T={T:g})"
         rows.append({"loop": name, "policy": policy.name, "control_period": T,
@@ -187,22 +222,21 @@ def run_margins(spec: Any, out: Any, *, log: Log = None) -> dict[str, object]:
                      **M.loop_margins(loop, wd).to_dict()})
         if log:
             log(f"margins {name}")
-        if T == scenario0.control_period:
+        if T == T0:
             nyq += _nyquist_rows(name, loop, M.frequency_grid(
                 lo=prm["omega_min"], hi=prm["omega_max"], n=prm["nyquist_points"], dt=T))
+    return rows, nyq
+
+
+def _zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray) -> dict[str, np.ndarray]:
+    """The open-loop poles, the zeros of force → p and force → θ, and the transmission zeros of
+    y = [p, θ]."""
+    from pendulum_lqg.analysis import margins as M
+
     chans = M.channel_zeros(A, B, C)
-    zeros = {"force_to_p": chans[0], "force_to_theta": chans[1],
-             "transmission_zeros_y=[p,θ]": M.transmission_zeros(A, B, C),
-             "open_loop_poles": np.linalg.eigvals(A)}
-    summary = {"experiment": spec.name, "study": "margins", "seed": spec.seed,
-               "params": prm, "K_lqr": lqr.K, "L_kalman_bucy": kb.L, "zeros": zeros,
-               "loops": rows, "ltr": ltr_rows}
-    _write(out, "summary.json", _json(summary))
-    _write(out, "margins.csv", _csv(_uniform(rows)))
-    _write(out, "ltr.csv", _csv(ltr_rows))
-    _write(out, "nyquist.csv", _csv(nyq))
-    _write(out, "summary.md", margins_markdown(summary))
-    return summary
+    return {"force_to_p": chans[0], "force_to_theta": chans[1],
+            "transmission_zeros_y=[p,θ]": M.transmission_zeros(A, B, C),
+            "open_loop_poles": np.linalg.eigvals(A)}
 
 
 def _uniform(rows: list[dict[str, object]]) -> list[dict[str, object]]:
@@ -231,14 +265,14 @@ def margins_markdown(summary: dict[str, Any]) -> str:
              f"transmission zeros of y = [p, θ]: {_zeros_text(z['transmission_zeros_y=[p,θ]'])}.",
              "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in summary["loops"]:
-        lines.append("| " + " | ".join([r["loop"], str(r["closed_loop_stable"])] + [_g(r[k]) for k in (
+        lines.append("| " + " | ".join([r["loop"], str(r["closed_loop_stable"])] + [_cell(r[k]) for k in (
             "min_return_difference", "gain_margin_lower", "gain_margin_upper", "phase_margin_deg",
             "disk_margin", "disk_gain_margin", "disk_phase_margin_deg")]) + " |")
     lines += ["", "Loop transfer recovery: W = q²BBᵀ, V fixed (continuous Kalman–Bucy + LQR).", "",
               "| measurement | q | recovery error | min abs(1+L) | GM lower | GM upper | PM [deg] | "
               "disk margin α |", "|---|---|---|---|---|---|---|---|"]
     for r in summary["ltr"]:
-        lines.append("| " + " | ".join([r["measurement"]] + [_g(r[k]) for k in (
+        lines.append("| " + " | ".join([r["measurement"]] + [_cell(r[k]) for k in (
             "q", "recovery_error", "min_return_difference", "gain_margin_lower",
             "gain_margin_upper", "phase_margin_deg", "disk_margin")]) + " |")
     return "\n".join(lines) + "\n"
@@ -250,9 +284,6 @@ def run_roa(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
     """Per configuration: the bisection for the largest θ₀ (noisy, ``spec.episodes`` per batch)
     and the noise-free (θ₀, θ̇₀) map. Finished configurations are kept in ``units/`` and skipped
     by a resumed run."""
-    from pendulum_lqg.analysis.roa import bisect_theta, success_map
-    from pendulum_lqg.policies.loading import build_policy
-
     prm = spec.study_params
     t_lo, t_hi, t_n = prm["map_theta"]
     d_lo, d_hi, d_n = prm["map_theta_dot"]
@@ -264,27 +295,55 @@ def run_roa(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
         if unit.exists():
             results.append(read_json(unit, where="unit"))   # regular, size and nesting bounded
             continue
-        scenario, dspec = cfg.build()
-        nominal, simulated = cfg.plants(scenario)
-        policy = build_policy(cfg.plugin, plant=nominal, scenario=scenario, spec=dspec)
-        bis = bisect_theta(simulated, scenario, policy, seed=spec.seed, episodes=spec.episodes,
-                           level=prm["level"], theta_lo=prm["theta_lo"],
-                           theta_hi=prm["theta_hi"], tolerance=prm["tolerance"], nthread=nthread)
-        quiet = scenario.replace(noise=dataclasses.replace(scenario.noise, scale=0.0))
-        smap = success_map(simulated, quiet, policy, thetas, theta_dots, seed=spec.seed,
-                           settle_fraction=prm["settle_fraction"], nthread=nthread)
-        entry = {"index": cfg.index, "values": cfg.values, "label": cfg.label,
-                 "policy": policy.name, "estimate0": scenario.estimate0,
-                 "theta_star": bis.theta_star, "theta_fail": bis.theta_fail,
-                 "censored": bis.censored, "evaluations": [e.to_dict() for e in bis.evaluations],
-                 "map_recovered_fraction": float(smap["recovered"].mean()),
-                 "map": {k: v.astype(float).tolist() for k, v in smap.items()}}
+        entry = _roa_entry(spec, cfg, thetas, theta_dots, nthread)
         _write(out, f"units/c{cfg.index:03d}.json", _json(entry))
         results.append(json.loads(_json(entry)))
         if log:
             log(f"[{cfg.index + 1}/{len(spec.configurations)}] {cfg.label}: θ* = "
-                f"{bis.theta_star:.3f} rad, map recovered {smap['recovered'].mean():.0%}")
-    bis_rows, map_rows = [], []
+                f"{entry['theta_star']:.3f} rad, map recovered "
+                f"{entry['map_recovered_fraction']:.0%}")
+    bis_rows, map_rows = _roa_rows(results, thetas, theta_dots)
+    summary = {"experiment": spec.name, "study": "roa", "seed": spec.seed,
+               "episodes_per_batch": spec.episodes, "params": prm,
+               "configurations": [{k: v for k, v in r.items() if k not in ("map", "evaluations")}
+                                  for r in results]}
+    _write(out, "roa_bisection.csv", _csv(bis_rows))
+    _write(out, "roa_map.csv", _csv(map_rows))
+    _write(out, "summary.json", _json(summary))
+    _write(out, "summary.md", roa_markdown(summary))
+    return summary
+
+
+def _roa_entry(spec: Any, cfg: Any, thetas: np.ndarray, theta_dots: np.ndarray,
+               nthread: int | None) -> dict[str, Any]:
+    """One configuration's unit: the bisection for θ* under noise and the noise-free map."""
+    from pendulum_lqg.analysis.roa import bisect_theta, success_map
+    from pendulum_lqg.policies.loading import build_policy
+
+    prm = spec.study_params
+    scenario, dspec = cfg.build()
+    nominal, simulated = cfg.plants(scenario)
+    policy = build_policy(cfg.plugin, plant=nominal, scenario=scenario, spec=dspec)
+    bis = bisect_theta(simulated, scenario, policy, seed=spec.seed, episodes=spec.episodes,
+                       level=prm["level"], theta_lo=prm["theta_lo"],
+                       theta_hi=prm["theta_hi"], tolerance=prm["tolerance"], nthread=nthread)
+    quiet = scenario.replace(noise=dataclasses.replace(scenario.noise, scale=0.0))
+    smap = success_map(simulated, quiet, policy, thetas, theta_dots, seed=spec.seed,
+                       settle_fraction=prm["settle_fraction"], nthread=nthread)
+    return {"index": cfg.index, "values": cfg.values, "label": cfg.label,
+            "policy": policy.name, "estimate0": scenario.estimate0,
+            "theta_star": bis.theta_star, "theta_fail": bis.theta_fail,
+            "censored": bis.censored, "evaluations": [e.to_dict() for e in bis.evaluations],
+            "map_recovered_fraction": float(smap["recovered"].mean()),
+            "map": {k: v.astype(float).tolist() for k, v in smap.items()}}
+
+
+def _roa_rows(results: list[dict[str, Any]], thetas: np.ndarray, theta_dots: np.ndarray,
+              ) -> tuple[list[dict[str, object]], list[dict[str, object]]]:
+    """The rows of ``roa_bisection.csv`` (one per evaluation) and ``roa_map.csv`` (one per map
+    point) of every configuration."""
+    bis_rows: list[dict[str, object]] = []
+    map_rows: list[dict[str, object]] = []
     for r in results:
         for e in r["evaluations"]:
             bis_rows.append({"config": r["index"], "policy": r["policy"],
@@ -297,15 +356,7 @@ def run_roa(spec: Any, out: Any, *, nthread: int | None = None, log: Log = None,
                                  "survived": bool(r["map"]["survived"][i][j]),
                                  "recovered": bool(r["map"]["recovered"][i][j]),
                                  "cost": float(f"{r['map']['cost'][i][j]:.6g}")})
-    summary = {"experiment": spec.name, "study": "roa", "seed": spec.seed,
-               "episodes_per_batch": spec.episodes, "params": prm,
-               "configurations": [{k: v for k, v in r.items() if k not in ("map", "evaluations")}
-                                  for r in results]}
-    _write(out, "roa_bisection.csv", _csv(bis_rows))
-    _write(out, "roa_map.csv", _csv(map_rows))
-    _write(out, "summary.json", _json(summary))
-    _write(out, "summary.md", roa_markdown(summary))
-    return summary
+    return bis_rows, map_rows
 
 
 def roa_markdown(summary: dict[str, Any]) -> str:

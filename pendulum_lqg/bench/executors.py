@@ -78,6 +78,7 @@ class RayExecutor:
         if address not in (None, "auto"):
             check_reachable(str(address))
             _token_auth_for_explicit_address()         # read by Ray when it is imported
+        _workers_in_this_environment()
         try:
             import ray
         except ImportError:
@@ -172,6 +173,21 @@ def check_reachable(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
         raise ConfigError(f"--address: no Ray cluster answers at {address} ({why} within "
                           f"{timeout:g} s); start its head with `ray start --head` or give the "
                           "address it prints") from None
+
+
+def _workers_in_this_environment() -> None:
+    """Keep Ray's workers in the environment pendulum_lqg is installed in (read by Ray when it is
+    imported; a choice the user made in the environment stands).
+
+    Under ``uv run`` Ray (≥ 2.43) would otherwise start every worker as ``uv run … python`` in a
+    zipped copy of the current folder: with ``--no-sync`` that copy has no environment and each
+    worker dies on ``import ray``; without it each node resolves and installs the whole project
+    again before its worker can register. A work unit travels as JSON and needs only the installed
+    package, which a worker of the driver's own interpreter has.
+    """
+    import os
+
+    os.environ.setdefault("RAY_ENABLE_UV_RUN_RUNTIME_ENV", "0")
 
 
 def _token_auth_for_explicit_address() -> None:

@@ -279,19 +279,13 @@ class ExperimentSpec:
     def definition_fingerprint(self) -> str:
         """Hash of the resolved spec and of a custom model file's bytes, without the plugins'
         sources: a resumed sweep must have the same one (the units whose plugin changed since
-        are then stale, see :meth:`plugin_source`)."""
+        are then stale, see :attr:`Configuration.plugin_source`)."""
         blob = json.dumps(self.source, sort_keys=True, default=str).encode()
         first = self.configurations[0] if self.configurations else None
         for file in (first.model_file, first.lti_file) if first is not None else ():
             if file is not None:
                 blob += Path(file).read_bytes()
         return hashlib.sha256(blob).hexdigest()[:16]
-
-    @staticmethod
-    def plugin_source(cfg: Configuration) -> str | None:
-        """SHA-256 of ``cfg``'s plugin source (``None`` for a built-in policy): a unit written
-        with another one is stale."""
-        return cfg.plugin_source
 
 
 @dataclass(frozen=True)
@@ -392,18 +386,17 @@ def _grid_point(values: dict[str, Any], base: dict[str, dict[str, Any]],
 
 def _model_file(value: object, base_dir: Path | None) -> str | None:
     """``model_file`` as an absolute path (relative to the experiment file's folder, else the
-    current folder), checked to exist."""
+    current folder: :func:`~pendulum_lqg.util.resources.find_file`), checked to exist."""
+    from pendulum_lqg.util.resources import find_file
+
     if value is None:
         return None
     if not isinstance(value, str) or not value:
         raise ConfigError(f"model_file: expected a path to an MJCF file, got {value!r}")
-    path = Path(value).expanduser()
-    if not path.is_absolute():
-        near = base_dir / path if base_dir is not None else None
-        path = near if near is not None and near.is_file() else Path.cwd() / path
+    path = find_file(value, base_dir)
     if not path.is_file():
         raise ConfigError(f"model_file: no file {value!r}")
-    return str(path.resolve())
+    return str(path)
 
 
 def _located(exc: PendulumLQGError, base: dict[str, dict[str, Any]],
@@ -431,6 +424,28 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     ``base_dir`` is the folder relative plugin files (``policy = ["my_ctrl.py:make"]``) are taken
     from: the experiment file's own folder (then the current folder).
     """
+    from pendulum_lqg.bench.lti import check_lti_experiment, lti_file
+
+    base = _checked_tables(data)
+    grid = _checked_grid(data.get("grid", {}))
+    study, study_params = _study(data)
+    model_file = _model_file(data.get("model_file"), base_dir)
+    lti = lti_file(data.get("lti_file"), base_dir)
+    if lti is not None:
+        check_lti_experiment(data)
+    episodes = _as_int("episodes", data.get("episodes", 100), 1)
+    seed = _as_int("seed", data.get("seed", 0), 0)
+    chunk = _as_int("chunk", data.get("chunk", 250), 1)
+    configs = _configurations(grid, base, episodes, base_dir, model_file=model_file, lti=lti)
+    return ExperimentSpec(name=str(data.get("name", name)), description=str(
+        data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,
+        configurations=tuple(configs), source=dict(data),
+        study=study, study_params=study_params, base_dir=base_dir)
+
+
+def _checked_tables(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """The top-level keys and those of the ``[scenario]``, ``[noise]``, ``[design]`` and
+    ``[model]`` tables checked, ``name`` and ``description`` too: copies of the four tables."""
     check_keys("experiment", data, TOP_KEYS)
     for table, known in (("scenario", SCENARIO_KEYS), ("noise", NOISE_KEYS),
                          ("design", DESIGN_KEYS), ("model", MODEL_KEYS)):
@@ -442,7 +457,12 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
             raise ConfigError(f"{key}: expected a string, got {data[key]!r}")
     if "name" in data:
         check_name(str(data["name"]))
-    grid = data.get("grid", {})
+    return base
+
+
+def _checked_grid(grid: dict[str, Any]) -> dict[str, Any]:
+    """``[grid]``: known keys, non-empty lists, built-in controller and observer names, and
+    ``delay`` with ``delay_kind``."""
     check_keys("grid", grid, GRID_KEYS)
     for key, values in grid.items():
         if not isinstance(values, list) or not values:
@@ -460,6 +480,12 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     if ("delay" in grid) != ("delay_kind" in grid):
         raise ConfigError("grid.delay: give delay and delay_kind together (delay_kind = "
                           "['measurement', 'actuator'] says which delay the values set)")
+    return grid
+
+
+def _study(data: dict[str, Any]) -> tuple[str | None, dict[str, Any]]:
+    """``study`` and its parameter table (defaults filled in); a study's table without
+    ``study`` naming it is refused."""
     study = data.get("study")
     study_params: dict[str, Any] = {}
     if study is not None:
@@ -469,18 +495,18 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     for other in STUDIES:
         if other in data and other != study:
             raise ConfigError(f"{other}: a [{other}] table needs study = {other!r}")
-    model_file = _model_file(data.get("model_file"), base_dir)
-    from pendulum_lqg.bench.lti import check_lti_experiment, lti_file
+    return (None if study is None else str(study)), study_params
 
-    lti = lti_file(data.get("lti_file"), base_dir)
-    if lti is not None:
-        check_lti_experiment(data)
-    episodes = _as_int("episodes", data.get("episodes", 100), 1)
-    seed = _as_int("seed", data.get("seed", 0), 0)
-    chunk = _as_int("chunk", data.get("chunk", 250), 1)
-    keys = list(grid)
+
+def _configurations(grid: dict[str, Any], base: dict[str, dict[str, Any]], episodes: int,
+                    base_dir: Path | None, *, model_file: str | None, lti: str | None,
+                    ) -> list[Configuration]:
+    """Every point of the grid (the Cartesian product of its lists, in the file's key order) as
+    a validated configuration, their number and rows checked against the ceilings first; an
+    error names the key (``design.R``) and the grid point."""
     from pendulum_lqg.util.limits import MAX_CONFIGURATIONS, check_at_most
 
+    keys = list(grid)
     n_configs = math.prod(len(grid[k]) for k in keys)
     check_at_most("grid", n_configs, MAX_CONFIGURATIONS,
                   "configurations, each validated before the first unit runs")
@@ -499,10 +525,7 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
         except PendulumLQGError as exc:
             raise _located(exc, base, values) from exc
         configs.append(cfg)
-    return ExperimentSpec(name=str(data.get("name", name)), description=str(
-        data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,
-        configurations=tuple(configs), source=dict(data),
-        study=None if study is None else str(study), study_params=study_params, base_dir=base_dir)
+    return configs
 
 
 def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | None = None,
@@ -510,12 +533,13 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
     """Load a shipped experiment by name (``lecture``) or a TOML file by path.
 
     A bare name (no suffix, no folder) is looked up among the shipped experiments first, then as
-    ``NAME.toml`` in the current folder; anything else is a path. ``episodes``, ``seed`` and
+    ``NAME.toml`` in the current folder; anything else is a path (the current folder's, else the
+    shipped copy: :func:`~pendulum_lqg.util.resources.find_file`). ``episodes``, ``seed`` and
     ``model_file`` replace the file's (``bench --episodes/--seed/--model``; as
     :meth:`ExperimentSpec.with_overrides`, but the file is validated once, with them).
     """
     from pendulum_lqg.boundary import read_toml
-    from pendulum_lqg.util.resources import experiment_names, experiment_path
+    from pendulum_lqg.util.resources import experiment_names, experiment_path, find_file
 
     path = Path(name_or_path)
     if not path.suffix and len(path.parts) == 1:
@@ -524,6 +548,8 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
             path = shipped
         elif Path(f"{name_or_path}.toml").is_file():
             path = Path(f"{name_or_path}.toml")
+    elif not path.is_file():
+        path = find_file(path)          # experiments/NAME.toml from an installed package
     if not path.is_file():
         raise ConfigError(f"experiment: no file {name_or_path!r}; known experiments: "
                           + ", ".join(experiment_names()))

@@ -40,19 +40,18 @@ LTI_GRID_KEYS = ("policy", "controller", "observer", "noise_scale", "duration", 
 
 def lti_file(value: object, base_dir: Path | None) -> str | None:
     """``lti_file`` as an absolute path (relative to the experiment file's folder, else the
-    current folder), checked to exist."""
+    current folder: :func:`~pendulum_lqg.util.resources.find_file`), checked to exist."""
+    from pendulum_lqg.util.resources import find_file
+
     if value is None:
         return None
     if not isinstance(value, str) or not value:
         raise ConfigError(f"lti_file: expected a path to an LTI plant file (TOML or .npz), got "
                           f"{value!r}")
-    path = Path(value).expanduser()
-    if not path.is_absolute():
-        near = base_dir / path if base_dir is not None else None
-        path = near if near is not None and near.is_file() else Path.cwd() / path
+    path = find_file(value, base_dir)
     if not path.is_file():
         raise ConfigError(f"lti_file: no file {value!r}")
-    return str(path.resolve())
+    return str(path)
 
 
 def check_lti_experiment(data: dict[str, Any]) -> None:

@@ -22,10 +22,10 @@
 
 Bare physics and the closed loop alternate ``repeats`` times; the ratio is the median of the
 per-pair ratios, so a slow spell of the machine affects both sides of a pair. Each timed call
-starts after a full garbage collection (``gc.collect()``): a collection of the whole heap, which
-the objects of earlier calls would otherwise trigger inside whichever call came next, takes
-~55 ms here (2–3 % of a closed-loop run); each call still pays for the collections its own
-allocations cause.
+starts after a full garbage collection (``gc.collect()``), as ``timeit`` disables collection: a
+collection of the whole heap, which the objects of earlier calls would otherwise trigger inside
+whichever call came next, would be charged to that call (docs/performance.md, "Settings that rest
+on a measurement"); each call still pays for the collections its own allocations cause.
 """
 
 from __future__ import annotations
@@ -47,8 +47,9 @@ from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.model.plant import load_plant, steps_per_period
 from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
-#: Fewest physics steps a rollout chunk (one thread-pool task) should hold: smaller chunks cost
-#: more in hand-offs than they win in load balance (measured with 64 and 1024 rows).
+#: Fewest physics steps a rollout chunk (one thread-pool task) should hold: each chunk costs a
+#: hand-off to a thread, and below this the hand-offs cost more than the load balance of more
+#: chunks wins (docs/performance.md, "Settings that rest on a measurement").
 MIN_CHUNK_STEPS = 300
 
 
@@ -159,6 +160,46 @@ def _count(name: str, value: object) -> int:
 def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None = None,
              repeats: int = 5, memory: bool = False,
              log: Callable[[str], None] = lambda s: None) -> dict[str, Any]:
+    """``pendulum-lqg perf``: the measurements of the module docstring, as a dict of the series
+    and their medians and ratios, with ``"report"`` the lines the command prints. ``log`` gets a
+    line per repeat."""
+    scenario, plant, nstep = _checked_batch(episodes, duration, repeats)
+    k = steps_per_period(plant, scenario.control_period)
+    nthread = thread_count(nthread)
+    policy = design_policy(plant, scenario.control_period, scenario.noise,
+                           DesignSpec(controller="dlqr", observer="kalman"))
+    series = _alternate(plant, scenario, policy, episodes=episodes, nstep=nstep, nthread=nthread,
+                        repeats=repeats, log=log)
+    bare = {"rollout": series["rollout"], "batch": series["batch"]}
+    baseline = faster_series(bare)
+    raw, closed, with_outputs = bare[baseline], series["closed"], series["with_outputs"]
+    pair_ratios = [c / r for c, r in zip(closed, raw, strict=True)]
+    out: dict[str, Any] = {
+        "episodes": episodes, "duration_s": duration, "nthread": nthread, "repeats": repeats,
+        "physics_step_s": plant.timestep, "steps_per_period": k,
+        "shards": shard_count(episodes, nthread, "rollout", policy),
+        "raw_steps_per_s": raw, "bare_baseline": baseline,
+        "bare_rollout_steps_per_s": series["rollout"], "bare_batch_steps_per_s": series["batch"],
+        "closed_loop_steps_per_s": closed, "pair_ratios": pair_ratios,
+        "ratio": statistics.median(pair_ratios), "shard_idle_fraction": series["idle"],
+        "raw_with_outputs_steps_per_s": with_outputs,
+        "ratio_vs_outputs": statistics.median(c / r for c, r in
+                                              zip(closed, with_outputs, strict=True)),
+        "single_episode_steps_per_s": _single_episode_rate(plant, scenario, policy),
+    }
+    report = _report_lines(out)
+    if memory:
+        out["peak_mib_2s"], out["peak_mib_10s"] = _peak_memory(plant, scenario, policy, nthread,
+                                                               log)
+        report.append(f"peak traced memory, 1000 episodes:     {out['peak_mib_2s']:.1f} MiB at "
+                      f"2 s, {out['peak_mib_10s']:.1f} MiB at 10 s")
+    out["report"] = report
+    return out
+
+
+def _checked_batch(episodes: int, duration: float, repeats: int) -> tuple[Scenario, Any, int]:
+    """The scenario, the plant and the physics steps per episode of the timed batch, its sizes
+    checked first: nothing is allocated or timed before they are known to fit."""
     from pendulum_lqg.util.limits import (
         MAX_PERF_REPEATS,
         MAX_PERF_STEPS,
@@ -166,97 +207,97 @@ def run_perf(*, episodes: int = 1024, duration: float = 2.0, nthread: int | None
         check_at_most,
     )
 
-    # the sizes first: nothing is allocated or timed before they are known to fit
     check_at_most("repeats", _count("repeats", repeats), MAX_PERF_REPEATS,
                   "alternating pairs, each running the whole batch three times")
     check_at_most("episodes", _count("episodes", episodes), MAX_RUN_EPISODES,
                   "episodes of the one batch timed")
     scenario = Scenario(duration=duration)
     plant = load_plant()
-    k = steps_per_period(plant, scenario.control_period)
-    nstep = scenario.n_periods * k
+    nstep = scenario.n_periods * steps_per_period(plant, scenario.control_period)
     check_at_most("episodes × duration", episodes * nstep, MAX_PERF_STEPS,
                   f"physics steps of the batch, {episodes:,} episodes × {nstep:,} steps of "
                   f"{plant.timestep:g} s: the bare-physics baselines hold a force for each")
-    nthread = thread_count(nthread)
-    policy = design_policy(plant, scenario.control_period, scenario.noise,
-                           DesignSpec(controller="dlqr", observer="kalman"))
-    raw_rollout: list[float] = []
-    raw_batch: list[float] = []
-    closed: list[float] = []
-    idle: list[float] = []
-    with_outputs: list[float] = []
+    return scenario, plant, nstep
+
+
+def _alternate(plant: Any, scenario: Scenario, policy: Any, *, episodes: int, nstep: int,
+               nthread: int, repeats: int, log: Callable[[str], None]) -> dict[str, list[float]]:
+    """``repeats`` rounds of bare physics (rollout and batch), the closed loop and physics with
+    outputs, each call after a full collection: the series of rates (physics steps/s) and the
+    closed loop's shard idle fractions."""
+    series: dict[str, list[float]] = {"rollout": [], "batch": [], "closed": [], "idle": [],
+                                      "with_outputs": []}
     run_episodes(plant, scenario.replace(duration=scenario.control_period * 5), policy,
                  seed=0, episodes=range(8), nthread=nthread)   # warm-up (imports, pools)
     for i in range(repeats):
         gc.collect()
-        raw_rollout.append(raw_rollout_rate(plant, episodes, nstep, nthread))
+        series["rollout"].append(raw_rollout_rate(plant, episodes, nstep, nthread))
         gc.collect()
-        raw_batch.append(raw_batch_rate(plant, episodes, nstep, nthread))
+        series["batch"].append(raw_batch_rate(plant, episodes, nstep, nthread))
         gc.collect()
         t = time.perf_counter()
         res = run_episodes(plant, scenario, policy, seed=i, episodes=range(episodes),
                            nthread=nthread)
         elapsed = time.perf_counter() - t
-        steps = sum(round(float(r["duration"]) / plant.timestep) for r in res.rows)
-        closed.append(steps / elapsed)
-        idle.append(shard_idle(res.shard_seconds))
+        series["closed"].append(_physics_steps(plant, res.rows) / elapsed)
+        series["idle"].append(shard_idle(res.shard_seconds))
         del res
         gc.collect()
-        with_outputs.append(raw_rollout_rate(plant, episodes, nstep, nthread, outputs=True))
-        log(f"repeat {i + 1}/{repeats}: bare physics: rollout {raw_rollout[-1]:,.0f}, batch "
-            f"{raw_batch[-1]:,.0f} steps/s; closed loop {closed[-1]:,.0f} steps/s; physics with "
-            f"outputs {with_outputs[-1]:,.0f} steps/s")
-    bare = {"rollout": raw_rollout, "batch": raw_batch}
-    baseline = faster_series(bare)
-    raw = bare[baseline]
-    single_eps = 4
+        series["with_outputs"].append(raw_rollout_rate(plant, episodes, nstep, nthread,
+                                                       outputs=True))
+        log(f"repeat {i + 1}/{repeats}: bare physics: rollout {series['rollout'][-1]:,.0f}, batch "
+            f"{series['batch'][-1]:,.0f} steps/s; closed loop {series['closed'][-1]:,.0f} "
+            f"steps/s; physics with outputs {series['with_outputs'][-1]:,.0f} steps/s")
+    return series
+
+
+def _physics_steps(plant: Any, rows: list[dict[str, Any]]) -> int:
+    """Physics steps the episodes of ``rows`` ran (a failed episode stops early)."""
+    return sum(round(float(r["duration"]) / plant.timestep) for r in rows)
+
+
+def _single_episode_rate(plant: Any, scenario: Scenario, policy: Any, episodes: int = 4) -> float:
+    """Physics steps/s of the plain ``mj_step`` backend, one episode at a time."""
     t = time.perf_counter()
-    res = run_episodes(plant, scenario, policy, seed=0, episodes=range(single_eps), backend="step")
-    single = sum(round(float(r["duration"]) / plant.timestep) for r in res.rows) / (
-        time.perf_counter() - t)
-    pair_ratios = [c / r for c, r in zip(closed, raw, strict=True)]
-    ratio = statistics.median(pair_ratios)
-    out_ratio = statistics.median(c / r for c, r in zip(closed, with_outputs, strict=True))
-    raw_med, closed_med = statistics.median(raw), statistics.median(closed)
-    out: dict[str, Any] = {
-        "episodes": episodes, "duration_s": duration, "nthread": nthread, "repeats": repeats,
-        "physics_step_s": plant.timestep, "steps_per_period": k,
-        "shards": shard_count(episodes, nthread, "rollout", policy),
-        "raw_steps_per_s": raw, "bare_baseline": baseline, "bare_rollout_steps_per_s": raw_rollout,
-        "bare_batch_steps_per_s": raw_batch, "closed_loop_steps_per_s": closed,
-        "pair_ratios": pair_ratios, "ratio": ratio, "shard_idle_fraction": idle,
-        "raw_with_outputs_steps_per_s": with_outputs, "ratio_vs_outputs": out_ratio,
-        "single_episode_steps_per_s": single,
-    }
-    report = [
-        f"pendulum-lqg perf — {episodes} episodes × {duration:g} s, h = {plant.timestep:g} s, "
-        f"{k} steps per control period, {nthread} threads, {repeats} alternating pairs",
-        f"bare physics ({baseline}, the faster):{' ' * (12 - len(baseline))}{raw_med:>12,.0f} "
+    res = run_episodes(plant, scenario, policy, seed=0, episodes=range(episodes), backend="step")
+    return _physics_steps(plant, res.rows) / (time.perf_counter() - t)
+
+
+def _peak_memory(plant: Any, scenario: Scenario, policy: Any, nthread: int,
+                 log: Callable[[str], None]) -> tuple[float, float]:
+    """Peak traced allocations (MiB) of 1000-episode runs of 2 s and of 10 s."""
+    peaks = []
+    for dur in (2.0, 10.0):
+        tracemalloc.start()
+        run_episodes(plant, scenario.replace(duration=dur), policy, seed=0,
+                     episodes=range(1000), nthread=nthread)
+        peaks.append(tracemalloc.get_traced_memory()[1] / 2**20)
+        tracemalloc.stop()
+        log(f"memory: 1000 episodes × {dur:g} s peak {peaks[-1]:.1f} MiB")
+    return peaks[0], peaks[1]
+
+
+def _report_lines(out: dict[str, Any]) -> list[str]:
+    """The lines ``pendulum-lqg perf`` prints for the measurements ``out``."""
+    median = statistics.median
+    baseline, idle, pairs = out["bare_baseline"], out["shard_idle_fraction"], out["pair_ratios"]
+    return [
+        f"pendulum-lqg perf — {out['episodes']} episodes × {out['duration_s']:g} s, "
+        f"h = {out['physics_step_s']:g} s, {out['steps_per_period']} steps per control period, "
+        f"{out['nthread']} threads, {out['repeats']} alternating pairs",
+        f"bare physics ({baseline}, the faster):{' ' * (12 - len(baseline))}"
+        f"{median(out['raw_steps_per_s']):>12,.0f} physics steps/s (median)",
+        f"  one mujoco.rollout call, no outputs:  {median(out['bare_rollout_steps_per_s']):>12,.0f}",
+        f"  one mujoco.batch Batch.step call:     {median(out['bare_batch_steps_per_s']):>12,.0f}",
+        f"closed loop (DLQR + Kalman, noisy):     {median(out['closed_loop_steps_per_s']):>12,.0f} "
         "physics steps/s (median)",
-        f"  one mujoco.rollout call, no outputs:  {statistics.median(raw_rollout):>12,.0f}",
-        f"  one mujoco.batch Batch.step call:     {statistics.median(raw_batch):>12,.0f}",
-        f"closed loop (DLQR + Kalman, noisy):     {closed_med:>12,.0f} physics steps/s (median)",
-        f"ratio closed / bare physics:            {ratio:>12.3f}   (median of the pair ratios, "
-        f"pairs {min(pair_ratios):.3f}–{max(pair_ratios):.3f}; target ≥ 0.90)",
-        f"  vs physics writing state + sensors:   {out_ratio:>12.3f}   "
-        f"({statistics.median(with_outputs):,.0f} steps/s)",
-        f"shards idle while the last one runs:    {100 * statistics.median(idle):>11.1f} %   "
+        f"ratio closed / bare physics:            {out['ratio']:>12.3f}   (median of the pair "
+        f"ratios, pairs {min(pairs):.3f}–{max(pairs):.3f}; target ≥ 0.90)",
+        f"  vs physics writing state + sensors:   {out['ratio_vs_outputs']:>12.3f}   "
+        f"({median(out['raw_with_outputs_steps_per_s']):,.0f} steps/s)",
+        f"shards idle while the last one runs:    {100 * median(idle):>11.1f} %   "
         f"(median; {100 * min(idle):.1f}–{100 * max(idle):.1f} %; "
         f"{out['shards']} shards, fixed at the start)",
-        f"single-episode path (mj_step loop):     {single:>12,.0f} physics steps/s",
+        f"single-episode path (mj_step loop):     {out['single_episode_steps_per_s']:>12,.0f} "
+        "physics steps/s",
     ]
-    if memory:
-        peaks = {}
-        for dur in (2.0, 10.0):
-            tracemalloc.start()
-            run_episodes(plant, scenario.replace(duration=dur), policy, seed=0,
-                         episodes=range(1000), nthread=nthread)
-            peaks[dur] = tracemalloc.get_traced_memory()[1] / 2**20
-            tracemalloc.stop()
-            log(f"memory: 1000 episodes × {dur:g} s peak {peaks[dur]:.1f} MiB")
-        out["peak_mib_2s"], out["peak_mib_10s"] = peaks[2.0], peaks[10.0]
-        report.append(f"peak traced memory, 1000 episodes:     {peaks[2.0]:.1f} MiB at 2 s, "
-                      f"{peaks[10.0]:.1f} MiB at 10 s")
-    out["report"] = report
-    return out

@@ -180,7 +180,7 @@ class ResultsDir:
         csv_file = self.units_dir / f"{unit.key}.csv"
         record_file = self.units_dir / f"{unit.key}.json"
         if not record_file.exists():
-            return "no check record (written by an older version or cut short)"
+            return "no check record (the run stopped between writing its CSV and its record)"
         try:
             data = read_bytes(csv_file, where="unit")
         except ConfigError as exc:
@@ -260,8 +260,8 @@ def _unit_record(unit: WorkUnit, spec: ExperimentSpec, data: bytes) -> dict[str,
     record = {"fingerprint": spec.definition_fingerprint(), "config": unit.config.index,
               "start": unit.start, "stop": unit.stop, "sha256": hashlib.sha256(data).hexdigest(),
               "rows": max(len(lines) - 1, 0), "columns": header if lines else []}
-    source = spec.plugin_source(unit.config)
-    if source is not None:                     # (records of built-in policies stay as they were)
+    source = unit.config.plugin_source
+    if source is not None:                     # only a plug-in's units carry its source digest
         record["plugin_source"] = source
     return record
 
@@ -332,7 +332,7 @@ def config_theory(cfg: Configuration) -> dict[str, Any] | None:
             "cost_J": res.cost_J, "verdict": res.verdict}
 
 
-def _fmt(stat: dict[str, float], digits: int = 3) -> str:
+def _stat_cell(stat: dict[str, float], digits: int = 3) -> str:
     mean, se = stat["mean"], stat["se"]
     if mean != mean:  # nan
         return "–"
@@ -342,7 +342,7 @@ def _fmt(stat: dict[str, float], digits: int = 3) -> str:
 
 
 def _theory_cell(theory: dict[str, Any], key: str) -> str:
-    return _fmt({"mean": theory[key], "se": float("nan")}) if key in theory else "–"
+    return _stat_cell({"mean": theory[key], "se": float("nan")}) if key in theory else "–"
 
 
 def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
@@ -366,11 +366,12 @@ def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
         fails = ", ".join(f"{k} {v}" for k, v in sorted(s["failures"].items())) or "–"
         th = c.get("theory") or {}
         cells = [str(c["values"][k]) for k in keys] + [
-            f"{s['success_rate']:.1%} [{lo:.1%}, {hi:.1%}]", _fmt(s["cost"]),
-            _fmt(s["rms_theta"]), _theory_cell(th, "rms_theta"), _fmt(s["max_abs_theta"]),
-            _fmt(s["rms_p"]), _theory_cell(th, "rms_p"), _fmt(s["rms_u"]), _theory_cell(th, "rms_u"),
-            f"{s['saturated_fraction']['mean']:.1%}", _fmt(s["rms_est_err_theta"]),
-            _theory_cell(th, "rms_est_err_theta"), _fmt(s["rms_est_err_p_dot"]),
+            f"{s['success_rate']:.1%} [{lo:.1%}, {hi:.1%}]", _stat_cell(s["cost"]),
+            _stat_cell(s["rms_theta"]), _theory_cell(th, "rms_theta"), _stat_cell(s["max_abs_theta"]),
+            _stat_cell(s["rms_p"]), _theory_cell(th, "rms_p"), _stat_cell(s["rms_u"]),
+            _theory_cell(th, "rms_u"),
+            f"{s['saturated_fraction']['mean']:.1%}", _stat_cell(s["rms_est_err_theta"]),
+            _theory_cell(th, "rms_est_err_theta"), _stat_cell(s["rms_est_err_p_dot"]),
             f"{th['spectral_radius']:.4f}" if th else "–", fails]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
@@ -398,14 +399,14 @@ def _lti_markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
         lo, hi = s["success_ci95"]
         th = c.get("theory") or {}
         cells = [str(c["values"][k]) for k in keys] + [
-            f"{s['success_rate']:.1%} [{lo:.1%}, {hi:.1%}]", _fmt(s["cost"])]
+            f"{s['success_rate']:.1%} [{lo:.1%}, {hi:.1%}]", _stat_cell(s["cost"])]
         for prefix in ("rms_", None, "rms_est_err_"):
             if prefix is None:
-                cells += [_fmt(s["rms_u"]), _theory_cell(th, "rms_u"),
+                cells += [_stat_cell(s["rms_u"]), _theory_cell(th, "rms_u"),
                           f"{s['saturated_fraction']['mean']:.1%}"]
                 continue
             for name in states:
-                cells += [_fmt(s[prefix + name]), _theory_cell(th, prefix + name)]
+                cells += [_stat_cell(s[prefix + name]), _theory_cell(th, prefix + name)]
         cells += [f"{th['spectral_radius']:.4f}" if th else "–",
                   ", ".join(f"{k} {v}" for k, v in sorted(s["failures"].items())) or "–"]
         lines.append("| " + " | ".join(cells) + " |")

@@ -21,6 +21,7 @@ gives each unit the last digits of the machine that ran it (docs: Concepts, repr
 
 from __future__ import annotations
 
+import contextlib
 import os
 import platform
 import signal
@@ -114,48 +115,17 @@ def run_sweep(spec: ExperimentSpec, out: str | Path | ResultsDir, *,
     """
     from pendulum_lqg.bench.executors import LocalExecutor
 
-    if spec.study is not None:
-        raise ConfigError(f"experiment: {spec.name} is a {spec.study} study; run it with "
-                          "pendulum_lqg.analysis.studies.run_study")
-    if record is not None and not str(record).strip():
-        raise ConfigError(f"--record: expected a folder for the recordings, got {str(record)!r}")
-    if record is not None and Path(record).exists() and not Path(record).is_dir():
-        raise ConfigError(f"--record: {record} is a file; expected a folder for the recordings "
-                          "(it is created if missing)")
-    if on_mismatch not in ("recompute", "refuse"):
-        raise ConfigError(f"on_mismatch: expected 'recompute' or 'refuse', got {on_mismatch!r}")
+    _check_sweep_options(spec, record, on_mismatch)
     folder = out if isinstance(out, ResultsDir) else ResultsDir(out)
     folder.prepare(spec, force=force, resume=resume, allow_version_change=allow_version_change)
     units = spec.units()
     try:
-        mismatched: list[tuple[str, str]] = []
-        done = folder.verified(spec, lambda key, why: mismatched.append((key, why)))
-        if mismatched and on_mismatch == "refuse":
-            key, why = mismatched[0]
-            raise ConfigError(f"--resume: unit {key} fails its check: {why} "
-                              f"({len(mismatched)} unit(s) in all); drop --on-mismatch refuse to "
-                              "recompute them")
-        for key, why in mismatched:
-            if log is not None:
-                log(f"unit {key}: {why}; recomputing it")
+        done = _verified_units(folder, spec, on_mismatch, log)
         executor = executor or LocalExecutor(nthread=nthread)
         todo = [u for u in units if u.key not in done]
         started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
         t0 = time.perf_counter()
-        failures: list[UnitFailure] = []
-        with terminate_as_interrupt():
-            try:
-                for unit, rows, error in _with_progress(executor.run(todo), todo, len(units),
-                                                        len(units) - len(todo), progress, log):
-                    if error is not None:
-                        failures.append(UnitFailure(unit.key, error))
-                        continue
-                    folder.write_unit(unit, rows)  # type: ignore[arg-type]
-            except KeyboardInterrupt:
-                raise SweepInterrupted(folder.path, len(folder.verified(spec)), len(units)
-                                       ) from None
-            finally:
-                executor.close()
+        failures = _run_units(executor, todo, folder, spec, len(units), progress, log)
         if failures:
             return SweepResult(folder.path, None, len(units), len(todo) - len(failures), failures)
         meta = {"started": started, "elapsed_s": round(time.perf_counter() - t0, 3),
@@ -170,19 +140,77 @@ def run_sweep(spec: ExperimentSpec, out: str | Path | ResultsDir, *,
     return SweepResult(folder.path, summary, len(units), len(todo))
 
 
-class terminate_as_interrupt:
-    """SIGTERM raises KeyboardInterrupt while a sweep runs (main thread only)."""
+def _check_sweep_options(spec: ExperimentSpec, record: str | Path | None,
+                         on_mismatch: str) -> None:
+    """A grid (not a study), a folder (or nothing) to record into, a known ``on_mismatch``."""
+    if spec.study is not None:
+        raise ConfigError(f"experiment: {spec.name} is a {spec.study} study; run it with "
+                          "pendulum_lqg.analysis.studies.run_study")
+    if record is not None and not str(record).strip():
+        raise ConfigError(f"--record: expected a folder for the recordings, got {str(record)!r}")
+    if record is not None and Path(record).exists() and not Path(record).is_dir():
+        raise ConfigError(f"--record: {record} is a file; expected a folder for the recordings "
+                          "(it is created if missing)")
+    if on_mismatch not in ("recompute", "refuse"):
+        raise ConfigError(f"on_mismatch: expected 'recompute' or 'refuse', got {on_mismatch!r}")
 
-    def __enter__(self) -> None:
-        self._old = None
-        if threading.current_thread() is threading.main_thread():
-            def _raise(signum: int, frame: object) -> None:
-                raise KeyboardInterrupt
-            self._old = signal.signal(signal.SIGTERM, _raise)
 
-    def __exit__(self, *exc: object) -> None:
-        if self._old is not None:
-            signal.signal(signal.SIGTERM, self._old)
+def _verified_units(folder: ResultsDir, spec: ExperimentSpec, on_mismatch: str,
+                    log: Log) -> set[str]:
+    """The keys of the units on disk that pass their check; one that fails is recomputed (said
+    through ``log``) or, with ``on_mismatch = "refuse"``, stops the run naming it."""
+    mismatched: list[tuple[str, str]] = []
+    done = folder.verified(spec, lambda key, why: mismatched.append((key, why)))
+    if mismatched and on_mismatch == "refuse":
+        key, why = mismatched[0]
+        raise ConfigError(f"--resume: unit {key} fails its check: {why} "
+                          f"({len(mismatched)} unit(s) in all); drop --on-mismatch refuse to "
+                          "recompute them")
+    for key, why in mismatched:
+        if log is not None:
+            log(f"unit {key}: {why}; recomputing it")
+    return done
+
+
+def _run_units(executor: Executor, todo: list[WorkUnit], folder: ResultsDir,
+               spec: ExperimentSpec, total: int, progress: bool | None,
+               log: Log) -> list[UnitFailure]:
+    """Run ``todo`` on ``executor``, writing each unit as it arrives: the units that failed.
+    Ctrl-C or SIGTERM stops the run (:class:`SweepInterrupted`); the executor is closed either
+    way."""
+    failures: list[UnitFailure] = []
+    with sigterm_as_interrupt():
+        try:
+            for unit, rows, error in _with_progress(executor.run(todo), todo, total,
+                                                    total - len(todo), progress, log):
+                if error is not None:
+                    failures.append(UnitFailure(unit.key, error))
+                    continue
+                folder.write_unit(unit, rows)  # type: ignore[arg-type]
+        except KeyboardInterrupt:
+            raise SweepInterrupted(folder.path, len(folder.verified(spec)), total) from None
+        finally:
+            executor.close()
+    return failures
+
+
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM raises KeyboardInterrupt (as Ctrl-C does), so a sweep stopped by
+    ``kill`` keeps its finished units and releases its lock; the previous handler is restored on
+    leaving. Only the main thread may install signal handlers: elsewhere nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def _raise(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGTERM, _raise)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
 
 
 Outcome = tuple[WorkUnit, list[dict[str, Any]] | None, str | None]

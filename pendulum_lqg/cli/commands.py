@@ -293,11 +293,11 @@ def _resume_command(args: argparse.Namespace, spec: Any, out: Any) -> str:
 def _bench_study(spec: Any, out: Any, args: argparse.Namespace) -> int:
     """``bench`` of an analysis study (``study = "margins" | "roa"`` in the TOML)."""
     from pendulum_lqg.analysis.studies import run_study
-    from pendulum_lqg.bench.sweep import terminate_as_interrupt
+    from pendulum_lqg.bench.sweep import sigterm_as_interrupt
 
     log = None if args.quiet else (lambda msg: print(msg, file=sys.stderr))
     try:
-        with terminate_as_interrupt():
+        with sigterm_as_interrupt():
             run_study(spec, out, nthread=args.nthread, log=log)
     except KeyboardInterrupt:
         print(f"interrupted: finished configurations are saved in {out.path}; complete them with: "

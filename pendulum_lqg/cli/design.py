@@ -61,7 +61,7 @@ def cmd_design(args: argparse.Namespace) -> int:
     return 0
 
 
-def _mat(M: Any, indent: int = 4) -> str:
+def _matrix_lines(M: Any, indent: int = 4) -> str:
     import numpy as np
 
     M = np.atleast_2d(np.asarray(M, dtype=float))
@@ -95,7 +95,7 @@ def _print_design(d: dict[str, Any], plant: Any) -> None:
         "Linearisation about the upright (central differences of mj_forward)",
     ]
     for key in ("A", "B", "C", "D"):
-        lines += [f"  {key} =", _mat(d[key])]
+        lines += [f"  {key} =", _matrix_lines(d[key])]
     lines += [f"  open-loop poles: {_poles(d['open_loop_poles'])}",
               f"  controllability: rank {s['controllability_rank']}/4, PBH-uncontrollable modes: "
               f"{_poles(s['uncontrollable_modes_pbh'])}, stabilisable: {s['stabilizable']}",
@@ -103,7 +103,7 @@ def _print_design(d: dict[str, Any], plant: Any) -> None:
               f"{_poles(s['unobservable_modes_pbh'])}, detectable: {s['detectable']}",
               "", f"Discrete model at T = {d['dt']:g} s (exact ZOH)"]
     for key in ("Phi", "Gamma"):
-        lines += [f"  {key} =", _mat(d[key])]
+        lines += [f"  {key} =", _matrix_lines(d[key])]
     lines += [f"  max |ZOH − composed mjd_transitionFD| = {d['zoh_vs_transition_fd_max_abs']:.3g}"
               " (the Euler integrator's O(h) error)", ""]
     lines += ["Weights and noise",
@@ -125,7 +125,7 @@ def _print_design(d: dict[str, Any], plant: Any) -> None:
          "L_dluenberger_poles", "z"),
     ]
     for title, gain, poles, plane in rows:
-        lines += [title, _mat(d[gain]), f"    poles ({plane}): {_poles(d[poles])}", ""]
+        lines += [title, _matrix_lines(d[gain]), f"    poles ({plane}): {_poles(d[poles])}", ""]
     sep = d["separation"]
     lines.append("Separation principle: eig(LQG loop) = eig(A − BK) ∪ eig(A − LC), max mismatch "
                  f"{sep['continuous_max_error']:.2g} (continuous LQR + Kalman–Bucy), "

@@ -173,14 +173,8 @@ def add_theory_parser(sub: Any) -> None:
     _add_design_options(p)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="pendulum-lqg",
-                     description="LQG control of a MuJoCo cart-pole under noise: designs, noisy "
-                                 "closed-loop runs and benchmarks. Negative numbers and lists are "
-                                 "given as they are: --observer-poles -2,-3,-4,-5.")
-    parser.add_argument("--version", action="version", version=f"pendulum-lqg {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-
+def _add_design_parser(sub: Any) -> None:
+    """The ``design`` subcommand."""
     p = sub.add_parser("design", help="print the linearisation and every controller/observer design",
                        description="Linearise the MuJoCo cart-pole about the upright and print "
                                    "continuous/discrete LQR, Kalman and Luenberger designs.")
@@ -188,6 +182,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true",
                    help="machine-readable output (matrices as nested lists, poles as [re, im])")
 
+
+def _add_run_parser(sub: Any) -> None:
+    """The ``run`` subcommand: the policy and the episodes, then sensing, the backend and
+    the outputs, then the limits and the design options."""
     p = sub.add_parser("run", help="run seeded noisy episodes of one policy and summarise them",
                        description="Run seeded episodes of one policy (built-in or your own "
                                    "plugin) in the noisy MuJoCo loop and print their summary.")
@@ -224,6 +222,28 @@ def build_parser() -> argparse.ArgumentParser:
                         "exact sampled model, period, x0, noise, cost and limits (as theory "
                         "--lti); policies dlqr/lqr + none/kalman/kalman-predictor/luenberger "
                         "(default: none, the cart-pole)")
+    _add_sensing_options(p)
+    p.add_argument("--backend", choices=("rollout", "step"), default="rollout",
+                   help="batched MuJoCo (mujoco.batch) or a plain mj_step loop; bit-identical results "
+                        "(default rollout)")
+    p.add_argument("--nthread", type=_nonneg_int, default=None,
+                   help="physics threads (default: the CPU cores available, at most 8)")
+    p.add_argument("--record", metavar="FILE.rrd", default=None,
+                   help="write a Rerun recording of every episode to FILE.rrd (default: none)")
+    p.add_argument("--spawn", action="store_true",
+                   help="also stream the recording to a native Rerun viewer; the file is written "
+                        f"all the same (--record, default {DEFAULT_RECORDING}); without a display, "
+                        "or with no viewer listening within 5 s, only the file is written")
+    _add_plot_options(p)
+    p.add_argument("--json", action="store_true",
+                   help="machine-readable output: configuration, summary and every episode row")
+    add_call_timeout(p)
+    add_limit_options(p)
+    _add_design_options(p)
+
+
+def _add_sensing_options(p: argparse.ArgumentParser) -> None:
+    """``run``'s sensing and actuation: delays, sample losses, actuator lag, randomised plants."""
     g = p.add_argument_group("sensing and actuation")
     g.add_argument("--measurement-delay", type=_number, default=0.0, metavar="S",
                    help="age of the measurement the policy receives, in s (a whole number of "
@@ -239,17 +259,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="per-episode uniform scale of a parameter of the simulated plant, e.g. "
                         "pole_mass_scale=0.8:1.2 (repeatable; keys pole_mass_scale, "
                         "pole_length_scale, cart_mass_scale; default: none)")
-    p.add_argument("--backend", choices=("rollout", "step"), default="rollout",
-                   help="batched MuJoCo (mujoco.batch) or a plain mj_step loop; bit-identical results "
-                        "(default rollout)")
-    p.add_argument("--nthread", type=_nonneg_int, default=None,
-                   help="physics threads (default: the CPU cores available, at most 8)")
-    p.add_argument("--record", metavar="FILE.rrd", default=None,
-                   help="write a Rerun recording of every episode to FILE.rrd (default: none)")
-    p.add_argument("--spawn", action="store_true",
-                   help="also stream the recording to a native Rerun viewer; the file is written "
-                        f"all the same (--record, default {DEFAULT_RECORDING}); without a display, "
-                        "or with no viewer listening within 5 s, only the file is written")
+
+
+def _add_plot_options(p: argparse.ArgumentParser) -> None:
+    """``run --plot``: the picture of one episode."""
     g = p.add_argument_group("picture of an episode")
     g.add_argument("--plot", metavar="FILE", default=None,
                    help="draw one episode to FILE (.png, .svg or .pdf): p, θ, ṗ, θ̇ with the "
@@ -257,12 +270,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default: none)")
     g.add_argument("--plot-episode", type=_nonneg_int, default=0, metavar="K",
                    help="the episode --plot draws, 0 … --episodes − 1 (default 0, the first)")
-    p.add_argument("--json", action="store_true",
-                   help="machine-readable output: configuration, summary and every episode row")
-    add_call_timeout(p)
-    add_limit_options(p)
-    _add_design_options(p)
 
+
+def _add_bench_parser(sub: Any) -> None:
+    """The ``bench`` subcommand."""
     p = sub.add_parser("bench", help="run an experiment grid (experiments/*.toml)",
                        description="Run an experiment: a grid of configurations × seeded episodes "
                                    "(or an analysis study), written unit by unit into a results "
@@ -304,6 +315,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true",
                    help="no progress bar or per-unit lines (the table is still printed)")
 
+
+def _add_report_parser(sub: Any) -> None:
+    """The ``report`` subcommand."""
     p = sub.add_parser("report", help="turn results folders into a Markdown report with PNG figures",
                        description="Read results folders written by `pendulum-lqg bench` (grids and "
                                    "the margins / roa studies) and write report.md with tables and "
@@ -314,6 +328,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="report folder (default: <RESULTS>/report for one folder argument, else "
                         "report/)")
 
+
+def _add_perf_parser(sub: Any) -> None:
+    """The ``perf`` subcommand."""
     p = sub.add_parser("perf", help="throughput: closed loop vs bare MuJoCo physics, memory",
                        description="Time the batched noisy DLQR + Kalman loop against bare "
                                    "MuJoCo physics of the same batch (open-loop mujoco.rollout "
@@ -330,9 +347,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--memory", action="store_true",
                    help="also measure peak memory of 1000-episode benches of 2 s and 10 s")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``pendulum-lqg`` command: every subcommand and its options."""
+    parser = _Parser(prog="pendulum-lqg",
+                     description="LQG control of a MuJoCo cart-pole under noise: designs, noisy "
+                                 "closed-loop runs and benchmarks. Negative numbers and lists are "
+                                 "given as they are: --observer-poles -2,-3,-4,-5.")
+    parser.add_argument("--version", action="version", version=f"pendulum-lqg {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    _add_design_parser(sub)
+    _add_run_parser(sub)
+    _add_bench_parser(sub)
+    _add_report_parser(sub)
+    _add_perf_parser(sub)
     add_score_parsers(sub, _positive_int)
     add_theory_parser(sub)
     return parser
+
+
 
 
 # ---- helpers -------------------------------------------------------------------------------------

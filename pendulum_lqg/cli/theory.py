@@ -79,8 +79,8 @@ def _print_table(results: dict[str, Any], header: str) -> None:
         t.add_column(escape(col))
     for name, r in results.items():
         p, th = r.state_names[:2]
-        t.add_row(escape(name), f"{r.spectral_radius:.4f}", _g(r.std[p]), _g(r.std[th]),
-                  _g(r.u_std), _g(r.estimate_error_std[th]), _g(r.cost_J))
+        t.add_row(escape(name), f"{r.spectral_radius:.4f}", _cell(r.std[p]), _cell(r.std[th]),
+                  _cell(r.u_std), _cell(r.estimate_error_std[th]), _cell(r.cost_J))
     con.print(t)
     con.print("every std and the cost rate: --json")
     for name, r in results.items():
@@ -92,5 +92,5 @@ def _head(what: str, name: str, unit: str) -> str:
     return f"{what} {label}" + (f" [{unit}]" if unit else "")
 
 
-def _g(v: float) -> str:
+def _cell(v: float) -> str:
     return "∞" if math.isinf(v) else f"{v:.3g}"

@@ -119,7 +119,7 @@ class Simulator:
         self._closed = False
         self._capacity = 0
         self._streamed = bool(streamed_metrics)
-        self._u1 = np.zeros(1)                      # step_one's force as a one-row array
+        self._one_force = np.zeros(1)                      # step_one's force as a one-row array
         self.metrics: MetricsAccumulator | None = None
         self.sensing = SensingActuation(plant, scenario, self.k, outputs=lay.p)
         # measure_one's own path: plain sensing of y = [p, θ] (else it is measure()'s first row)
@@ -207,7 +207,7 @@ class Simulator:
                 self.metrics = MetricsAccumulator(
                     self.ids.max(initial=-1) + 1, h=self.h, k=self.k, weights=self.weights,
                     u_max=self.u_max, settle_band=sc.settle_band, layout=lay)
-            self._w = np.zeros((n, self.noise.n_proc))
+            self._proc_noise = np.zeros((n, self.noise.n_proc))     # w of the period, per row
         else:
             rows = np.asarray(rows)
             self.x[rows] = x0
@@ -242,15 +242,15 @@ class Simulator:
         before each :meth:`step`.
         """
         if rows is None:
-            self._w, v = self.noise.draw()
+            self._proc_noise, v = self.noise.draw()
             y = (self.x[:, :2] if self._C is None else self.x @ self._C.T) + v
             if self.sensing.plain_sensing:
                 return y
             return self.sensing.sense(y, np.arange(self.n), self.period)
         rows = np.asarray(rows)
         w, v = self.noise.draw(rows)
-        self._w = self._w.copy()             # it may be a view of the noise block
-        self._w[rows] = w
+        self._proc_noise = self._proc_noise.copy()             # it may be a view of the noise block
+        self._proc_noise[rows] = w
         y = (self.x[rows, :2] if self._C is None else self.x[rows] @ self._C.T) + v
         return y if self.sensing.plain_sensing else self.sensing.sense(y, rows, self.period[rows])
 
@@ -259,7 +259,7 @@ class Simulator:
         same numbers as ``measure()[0]``."""
         if not self._plain_one:
             return self.measure()[0]
-        self._w, v = self.noise.draw()
+        self._proc_noise, v = self.noise.draw()
         return self.x[0, :2] + v[0]
 
     def step(self, u: np.ndarray, *, x_hat: np.ndarray | None = None) -> StepResult:
@@ -295,8 +295,8 @@ class Simulator:
             res = self.step(np.array([u]))
             return float(res.cost[0]), int(res.reason[0]), float(res.requested[0])
         u = rules.saturate(float(u), self.u_max)
-        self._u1[0] = u
-        v, _, reset = self._advance(self._u1)
+        self._one_force[0] = u
+        v, _, reset = self._advance(self._one_force)
         # (positional: binding keywords costs the env's every step more than the call's work)
         _, reason, fail_step = rules.detect_failure(v, reset, self._theta_max, self.track,
                                                     self._state_limits)
@@ -328,13 +328,13 @@ class Simulator:
             command, steps = self.sensing.actuate(requested, self.period)
         if self.x is not v.start:                     # step_one leaves x there (see step_one)
             v.start[...] = self.x
-        forces = self.noise.forces(self._w) if self._force_noise else None
+        forces = self.noise.forces(self._proc_noise) if self._force_noise else None
         reset = self._physics.advance(self.x, command if steps is None else steps, forces, v)
         if steps is None:                              # after the physics (see PeriodView.direct)
             v.u_by_step[...] = command
         else:
             v.u[...] = steps
-        rules.end_of_period(v, self._w if self._state_noise else None)
+        rules.end_of_period(v, self._proc_noise if self._state_noise else None)
         return v, command, reset
 
     def _finish_period(self, v: PeriodView, u: np.ndarray, requested: np.ndarray,
@@ -359,15 +359,15 @@ class Simulator:
         process noise), so a step taken with the rest of the batch in between is harmless (vector
         envs in Gymnasium's NEXT_STEP autoreset mode); the rows' results are discarded."""
         self.x[rows] = 0.0
-        self._w = self._w.copy()
-        self._w[rows] = 0.0
+        self._proc_noise = self._proc_noise.copy()
+        self._proc_noise[rows] = 0.0
 
     def select(self, rows: np.ndarray) -> None:
         """Keep only these rows (drop finished episodes from the batch)."""
         self.x, self.t, self.period = self.x[rows], self.t[rows], self.period[rows]
         self.ids = self.ids[rows]
         self._id_index = as_slice(self.ids)
-        self._w = self._w[rows]
+        self._proc_noise = self._proc_noise[rows]
         self.noise.select(rows)
         self.sensing.select(rows, self._physics)
 

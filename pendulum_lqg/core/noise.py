@@ -42,11 +42,11 @@ CHUNK_PERIODS = 256
 #: then the rest in large blocks, a share of the batch per period (a staggered ring).
 FIRST_PERIODS = 8
 
-#: Held while a batch's generators draw one after another (a noise refill, the initial states).
-#: Every numpy draw releases the GIL, so two threads doing hundreds of them at once (the shards of
-#: a run, all starting together) would hand the GIL back and forth after each draw, and both
-#: bursts would take as long as the two in turn, or longer. Taking turns, the second shard's draws
-#: run while the first shard's physics does (which holds no GIL).
+#: Held while a batch's generators draw one after another (a noise refill, the initial states), so
+#: that the shards of a run take turns: each numpy draw releases and retakes the GIL, and two
+#: shards drawing at once would contend for it at every one of their hundreds of draws, while in
+#: turns one shard draws as the other's physics runs (the physics holds no GIL). The lock orders
+#: nothing that changes a number: each row draws from its own generator.
 DRAW_LOCK = threading.Lock()
 
 #: The lecture's per-step process-noise covariance of w (``x ← x + T·w``) and its period.
@@ -131,8 +131,7 @@ class NoiseStream:
     and scaled to physical units on the spot, so a period's draw is a view: the state jump ``δx``
     (or the ``k`` generalised forces) and the measurement noise ``v``. The block is stored
     period-major, ``(periods, n, width)``, so a period's noise of the whole batch is one
-    contiguous slab (stored episode-major, each episode's numbers lay ``periods·width`` apart and
-    a draw touched one cache line per episode).
+    contiguous slab, read in one sweep of memory rather than one cache line per episode.
 
     While every row is at the same period (a batch run, or a single env) the stream keeps one
     cursor for all rows; per-row draws (vector envs, whose rows restart at different periods) switch
@@ -204,8 +203,8 @@ class NoiseStream:
         rest in blocks of up to :data:`CHUNK_PERIODS` periods into a ring, one share of the
         batch per period (a 200-period run of 512 episodes: 64 episodes draw their periods
         8 … 199 at each of the periods 0 … 7). The numbers are the same — each episode's normals
-        are drawn in order, whatever the blocks — and a run's threads no longer all draw their
-        whole batch at once before their physics starts (:data:`DRAW_LOCK`). Leave it ``None``
+        are drawn in order, whatever the blocks — and a run's threads do not all draw their whole
+        batch at once before their physics can start (:data:`DRAW_LOCK`). Leave it ``None``
         when a generator outlives its episode (gymnasium envs: the next episode continues it, so
         where the noise stopped drawing is part of the results); per-row draws need that.
         """

@@ -20,7 +20,12 @@ import numpy as np
 
 from pendulum_lqg.core.loop import Simulator
 from pendulum_lqg.core.physics import thread_count
-from pendulum_lqg.core.protocol import PolicyProtocol, SelectablePolicyProtocol
+from pendulum_lqg.core.protocol import (
+    PolicyProtocol,
+    SelectablePolicyProtocol,
+    current_estimate,
+    optional_members,
+)
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import episode_generators, episode_seeds
 from pendulum_lqg.core.trajectory import Trajectory, TrajectoryLog, estimator_snapshot
@@ -42,7 +47,7 @@ class BatchResult:
     shard_seconds: list[tuple[float, float]] = field(default_factory=list)
 
 
-class _FixedBatch:
+class _WholeBatch:
     """A policy without ``select``: it keeps its whole original batch; rows of ended episodes get
     zero measurements and their forces are dropped."""
 
@@ -64,7 +69,7 @@ class _FixedBatch:
 
     @property
     def x_hat(self) -> np.ndarray | None:
-        est = getattr(self.policy, "x_hat", None)
+        est = current_estimate(self.policy)
         return None if est is None else np.asarray(est)[self.alive]
 
 
@@ -83,7 +88,7 @@ def shard_count(n: int, nthread: int, backend: str, policy: object) -> int:
     own generator). Only policies that declare ``independent_rows = True`` (every built-in; a plugin
     may opt in) are split — each shard gets a deep copy — others run as one batch.
     """
-    if backend != "rollout" or nthread < 2 or getattr(policy, "independent_rows", False) is not True:
+    if backend != "rollout" or nthread < 2 or not optional_members(policy).independent_rows:
         return 1
     return max(1, min(nthread, n // MIN_SHARD_ROWS))
 
@@ -178,19 +183,23 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: i
             policy.reset(n, x_hat0=x0.copy())
         else:
             policy.reset(n)
-        needs_state = bool(getattr(policy, "needs_state", False))
-        # without select, keep feeding the whole batch and use only the running rows
-        driven = (cast(SelectablePolicyProtocol, policy) if callable(getattr(policy, "select", None))
-                  else _FixedBatch(policy, n))
+        members = optional_members(policy)
+        needs_state = members.needs_state
+        # the policy as the loop drives it, on the running rows: itself when it selects them,
+        # else fed the whole batch with only the running rows used
+        loop_policy = (cast(SelectablePolicyProtocol, policy) if members.select is not None
+                       else _WholeBatch(policy, n))
+        # the estimator's rows are the running ones only when the policy selects them
+        estimator = members.estimator if members.select is not None else None
         for _ in range(sim.n_periods):
             if stop is not None and stop.is_set():
                 raise _Cancelled
             y = sim.measure()
             x_now = sim.x
-            u = driven.act(x_now if needs_state else y)
-            x_hat = getattr(driven, "x_hat", None)
+            u = loop_policy.act(x_now if needs_state else y)
+            x_hat = current_estimate(loop_policy)
             if log is not None:
-                snap = dict(t=sim.t, x=x_now, y=y, **estimator_snapshot(driven, x_hat, sim.n,
+                snap = dict(t=sim.t, x=x_now, y=y, **estimator_snapshot(estimator, x_hat, sim.n,
                                                                         sim.nx, sim.layout.p))
             res = sim.step(u, x_hat=x_hat)
             if log is not None:     # u: the requested force after saturation; u_policy: before
@@ -199,7 +208,7 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: i
             if res.failed.any():
                 keep = np.nonzero(~res.failed)[0]
                 sim.select(keep)
-                driven.select(keep)
+                loop_policy.select(keep)
                 if keep.size == 0:
                     break
         assert sim.metrics is not None

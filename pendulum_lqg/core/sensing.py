@@ -48,7 +48,8 @@ class SensingActuation:
     def __init__(self, plant: Plant, scenario: Scenario, k: int, *, outputs: int = 2) -> None:
         self.plant, self.scenario = plant, scenario
         self.outputs = outputs                                  # the length of y
-        self.dm, self.da = scenario.measurement_delay_periods, scenario.actuator_delay_periods
+        self.meas_delay = scenario.measurement_delay_periods     # whole control periods
+        self.act_delay = scenario.actuator_delay_periods
         self.dropout = scenario.dropout
         self.randomized = not scenario.randomize.is_empty()
         self.drops = UniformStream() if self.dropout > 0 else None
@@ -57,9 +58,9 @@ class SensingActuation:
         self.lag_decay = (np.exp(-np.arange(1, k + 1) * h / scenario.actuator_tau)
                           if scenario.actuator_tau > 0 else None)
         #: no delay and no losses: the measurement is the noisy sample of this period
-        self.plain_sensing = not (self.dm or self.drops is not None)
+        self.plain_sensing = not (self.meas_delay or self.drops is not None)
         #: no delay and no lag: the force requested is the force held over the period
-        self.plain_actuation = not (self.da or self.lag_decay is not None)
+        self.plain_actuation = not (self.act_delay or self.lag_decay is not None)
         self.active = not (self.plain_sensing and self.plain_actuation and not self.randomized)
         self.row_models: list[mujoco.MjModel] | None = None
 
@@ -71,8 +72,8 @@ class SensingActuation:
             return
         if rows is None:
             n = len(generators)
-            self.y_ring = np.full((n, self.dm, self.outputs), np.nan)     # nothing has arrived yet
-            self.u_ring = np.zeros((n, self.da))                # 0 N until the first force
+            self.y_ring = np.full((n, self.meas_delay, self.outputs), np.nan)     # nothing has arrived yet
+            self.u_ring = np.zeros((n, self.act_delay))                # 0 N until the first force
             self.force = np.zeros(n)                            # the lag's output
         else:
             self.y_ring[rows] = np.nan
@@ -103,8 +104,8 @@ class SensingActuation:
         current ``period``s) applied to this period's noisy samples ``y`` (len(rows), p)."""
         if self.drops is not None:
             y[self.drops.draw(rows) < self.dropout] = np.nan
-        if self.dm:
-            slot = period % self.dm                    # holds the sample taken d periods ago
+        if self.meas_delay:
+            slot = period % self.meas_delay                    # holds the sample taken d periods ago
             y, self.y_ring[rows, slot] = self.y_ring[rows, slot], y
         return y
 
@@ -113,9 +114,9 @@ class SensingActuation:
         at periods ``period``: ``(command, steps)`` — the command reaching the actuator (n,) (after
         the delay; what the metrics' ``u`` is), and with a lag the force of each physics step
         (n, k), else ``None``."""
-        if self.da:
+        if self.act_delay:
             idx = np.arange(u.shape[0])
-            slot = period % self.da                    # holds the force requested d periods ago
+            slot = period % self.act_delay                    # holds the force requested d periods ago
             u, self.u_ring[idx, slot] = self.u_ring[idx, slot], u
         if self.lag_decay is None:
             return u, None

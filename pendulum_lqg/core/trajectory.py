@@ -88,11 +88,11 @@ class TrajectoryLog:
 
 
 
-def estimator_snapshot(policy: object, x_hat: np.ndarray | None, n: int, nx: int = 4,
+def estimator_snapshot(est: object | None, x_hat: np.ndarray | None, n: int, nx: int = 4,
                        ny: int = 2) -> dict[str, np.ndarray]:
-    """The estimator intermediates a recording logs (nan where the policy has none); ``nx``,
-    ``ny`` the lengths of x and y."""
-    est = getattr(policy, "estimator", None)
+    """The estimator intermediates a recording logs: ``x_hat`` and the estimator ``est``'s
+    (:attr:`~pendulum_lqg.core.protocol.OptionalMembers.estimator`) ``x_prior``, ``innovation``
+    and ``P``, nan where there are none; ``nx``, ``ny`` the lengths of x and y."""
     nan_x = np.full((n, nx), np.nan)
     P = getattr(est, "P", None)
     return {"x_hat": x_hat if x_hat is not None else nan_x,

@@ -71,37 +71,37 @@ def augment_delays(Phi: ArrayLike, Gamma: ArrayLike, C: ArrayLike, *, measuremen
     n = Phi.shape[0]
     Gamma = as_matrix("Gamma", Gamma, (n, None))
     C = as_matrix("C", C, (None, n))
-    dm, da = measurement_delay, actuator_delay
-    for name, d in (("measurement_delay", dm), ("actuator_delay", da)):
+    d_m, d_a = measurement_delay, actuator_delay
+    for name, d in (("measurement_delay", d_m), ("actuator_delay", d_a)):
         if isinstance(d, bool) or not isinstance(d, int | np.integer) or d < 0:
             raise ShapeError(f"{name}: expected a whole number of periods ≥ 0, got {d!r}")
     m, p = Gamma.shape[1], C.shape[0]
-    na = n + p * dm + m * da
-    eta, nu = n, n + p * dm                           # first rows of the two delay lines
+    na = n + p * d_m + m * d_a
+    eta, nu = n, n + p * d_m                           # first rows of the two delay lines
     Pa = np.zeros((na, na))
     Ga = np.zeros((na, m))
     Pa[:n, :n] = Phi
-    if da:
+    if d_a:
         Pa[:n, nu:nu + m] = Gamma                     # ν¹ acts now
-        for i in range(da - 1):                       # νⁱ⁺¹ → νⁱ
+        for i in range(d_a - 1):                       # νⁱ⁺¹ → νⁱ
             Pa[nu + i * m:nu + (i + 1) * m, nu + (i + 1) * m:nu + (i + 2) * m] = np.eye(m)
-        Ga[nu + (da - 1) * m:, :] = np.eye(m)         # the new force enters the line's end
+        Ga[nu + (d_a - 1) * m:, :] = np.eye(m)         # the new force enters the line's end
     else:
         Ga[:n] = Gamma
-    if dm:
+    if d_m:
         Pa[eta:eta + p, :n] = C                       # η¹ ← C x
-        for j in range(dm - 1):                       # ηʲ → ηʲ⁺¹
+        for j in range(d_m - 1):                       # ηʲ → ηʲ⁺¹
             Pa[eta + (j + 1) * p:eta + (j + 2) * p, eta + j * p:eta + (j + 1) * p] = np.eye(p)
     Ca = np.zeros((p, na))
-    if dm:
-        Ca[:, eta + (dm - 1) * p:eta + dm * p] = np.eye(p)
+    if d_m:
+        Ca[:, eta + (d_m - 1) * p:eta + d_m * p] = np.eye(p)
     else:
         Ca[:, :n] = C
     Gw = np.zeros((na, n))
     Gw[:n] = np.eye(n)
     predict = np.zeros((n, na))
-    predict[:, :n] = np.linalg.matrix_power(Phi, da)
-    for i in range(1, da + 1):                        # Φ^{d_a − i} Γ νⁱ
-        predict[:, nu + (i - 1) * m:nu + i * m] = np.linalg.matrix_power(Phi, da - i) @ Gamma
+    predict[:, :n] = np.linalg.matrix_power(Phi, d_a)
+    for i in range(1, d_a + 1):                        # Φ^{d_a − i} Γ νⁱ
+        predict[:, nu + (i - 1) * m:nu + i * m] = np.linalg.matrix_power(Phi, d_a - i) @ Gamma
     return DelayAugmented(Phi=Pa, Gamma=Ga, C=Ca, G=Gw, predict=predict,
-                          measurement_delay=int(dm), actuator_delay=int(da))
+                          measurement_delay=int(d_m), actuator_delay=int(d_a))

@@ -231,10 +231,16 @@ def lti_from_mapping(data: dict[str, Any], *, name: str = "lti", path: Path | No
 
 
 def load_lti(path: str | Path) -> LTIPlant:
-    """Read an LTI plant from a TOML file or an ``.npz`` archive (module docstring)."""
-    path = Path(path)
+    """Read an LTI plant from a TOML file or an ``.npz`` archive (module docstring); a relative
+    path not found in the current folder is looked up among the shipped files
+    (:func:`~pendulum_lqg.util.resources.find_file`: ``experiments/lti/double_integrator.toml``
+    works from an installed package)."""
+    from pendulum_lqg.util.resources import find_file
+
+    given = Path(path)
+    path = given if given.is_file() else find_file(given)
     if not path.is_file():
-        raise ConfigError(f"lti: no file {str(path)!r}")
+        raise ConfigError(f"lti: no file {str(given)!r}")
     try:
         if path.suffix == ".npz":
             with np.load(path, allow_pickle=False) as npz:

@@ -31,7 +31,7 @@ from pendulum_lqg.design.kalman import measurement_update
 from pendulum_lqg.errors import ShapeError
 
 
-def mv(M: np.ndarray, X: np.ndarray) -> np.ndarray:
+def matvec(M: np.ndarray, X: np.ndarray) -> np.ndarray:
     """Row-wise ``M @ x`` for a batch ``X`` (n, j) → (n, i); bitwise independent of n
     (``einsum`` sums each row on its own, with no BLAS kernel choosing by size)."""
     return np.einsum("ij,nj->ni", M, X)
@@ -130,13 +130,13 @@ class CurrentEstimator(Estimator):
 
     def estimate(self, y: np.ndarray) -> np.ndarray:
         self.x_prior = self._prior
-        self.innovation = y - mv(self.C, self.x_prior)                     # y − C x̄
-        self.x_hat = self.x_prior + mv(self.gain, self.innovation)         # x̂ = x̄ + L(y − Cx̄)
+        self.innovation = y - matvec(self.C, self.x_prior)                     # y − C x̄
+        self.x_hat = self.x_prior + matvec(self.gain, self.innovation)         # x̂ = x̄ + L(y − Cx̄)
         self.x_hat = predict_only(lost_rows(y), self.x_prior, self.x_hat)
         return self.x_hat
 
     def update(self, u: np.ndarray) -> None:
-        self._prior = mv(self.Phi, self.x_hat) + mv(self.Gamma, u)         # x̄⁺ = Φx̂ + Γu
+        self._prior = matvec(self.Phi, self.x_hat) + matvec(self.Gamma, u)         # x̄⁺ = Φx̂ + Γu
 
 
 class PredictorEstimator(Estimator):
@@ -168,14 +168,14 @@ class PredictorEstimator(Estimator):
     def estimate(self, y: np.ndarray) -> np.ndarray:
         self._y = y
         self.x_prior = self.x_hat = self._prior
-        self.innovation = y - mv(self.C, self.x_prior)
+        self.innovation = y - matvec(self.C, self.x_prior)
         return self.x_hat
 
     def update(self, u: np.ndarray) -> None:
-        self._prior = mv(self.F, self.x_hat) + mv(self.G_u, u) + mv(self.G_y, self._y)
+        self._prior = matvec(self.F, self.x_hat) + matvec(self.G_u, u) + matvec(self.G_y, self._y)
         lost = lost_rows(self._y)
         if lost is not None:                                # prediction only: Φ x̂ + Γ u
-            model = mv(self.Phi, self.x_hat) + mv(self.Gamma, u)
+            model = matvec(self.Phi, self.x_hat) + matvec(self.Gamma, u)
             self._prior = predict_only(lost, model, self._prior)
 
     def select(self, rows: np.ndarray) -> None:
@@ -231,11 +231,11 @@ class TimeVaryingKalman(Estimator):
     def estimate(self, y: np.ndarray) -> np.ndarray:
         C = self.C
         self.x_prior = self._prior
-        self.innovation = y - mv(C, self.x_prior)
+        self.innovation = y - matvec(C, self.x_prior)
         ages = np.unique(self._age)
         if ages.size <= 1:                                  # the whole batch at one age
             self.M, self.P, self.gain = self._covariances(int(ages[0]) if ages.size else 0)
-            self.x_hat = self.x_prior + mv(self.gain, self.innovation)
+            self.x_hat = self.x_prior + matvec(self.gain, self.innovation)
             self.x_hat = predict_only(lost_rows(y), self.x_prior, self.x_hat)
             return self.x_hat
         n = self._age.size
@@ -246,12 +246,12 @@ class TimeVaryingKalman(Estimator):
             rows = np.nonzero(self._age == a)[0]
             M, P, L = self._covariances(a)
             self.M[rows], self.P[rows], self.gain[rows] = M, P, L
-            self.x_hat[rows] = self.x_prior[rows] + mv(L, self.innovation[rows])
+            self.x_hat[rows] = self.x_prior[rows] + matvec(L, self.innovation[rows])
         self.x_hat = predict_only(lost_rows(y), self.x_prior, self.x_hat)
         return self.x_hat
 
     def update(self, u: np.ndarray) -> None:
-        self._prior = mv(self.Phi, self.x_hat) + mv(self.Gamma, u)
+        self._prior = matvec(self.Phi, self.x_hat) + matvec(self.Gamma, u)
         self._age += 1
 
     def select(self, rows: np.ndarray) -> None:
@@ -288,8 +288,8 @@ class ReducedOrderEstimator(Estimator):
 
     def reset(self, x_hat0: np.ndarray, rows: np.ndarray | None = None) -> None:
         super().reset(x_hat0, rows)
-        tx = mv(self.T, np.asarray(x_hat0, dtype=float))     # [ŷ₀; ŵ₀]
-        z0 = tx[:, self._p:] - mv(self.gain, tx[:, :self._p])
+        tx = matvec(self.T, np.asarray(x_hat0, dtype=float))     # [ŷ₀; ŵ₀]
+        z0 = tx[:, self._p:] - matvec(self.gain, tx[:, :self._p])
         if rows is None:
             self._z = z0
             self._y = tx[:, :self._p].copy()
@@ -298,8 +298,8 @@ class ReducedOrderEstimator(Estimator):
             self._y[rows] = tx[:, :self._p]
 
     def _reconstruct(self, y: np.ndarray) -> np.ndarray:
-        w = self._z + mv(self.gain, y)
-        return mv(self.T_inv, np.hstack([y, w]))
+        w = self._z + matvec(self.gain, y)
+        return matvec(self.T_inv, np.hstack([y, w]))
 
     def estimate(self, y: np.ndarray) -> np.ndarray:
         self.x_prior = self._reconstruct(self._y)
@@ -312,7 +312,7 @@ class ReducedOrderEstimator(Estimator):
         return self.x_hat
 
     def update(self, u: np.ndarray) -> None:
-        self._z = mv(self.F, self._z) + mv(self.H_y, self._y) + mv(self.H_u, u)
+        self._z = matvec(self.F, self._z) + matvec(self.H_y, self._y) + matvec(self.H_u, u)
 
     def select(self, rows: np.ndarray) -> None:
         super().select(rows)
@@ -356,23 +356,23 @@ class DelayKalman(Estimator):
         z0[:, :self.n_state] = x_hat0
         if rows is None:
             self._z_prior, self.z_hat = z0, z0.copy()
-            self.x_control = mv(self.predict, z0)
+            self.x_control = matvec(self.predict, z0)
         else:
             self._z_prior[rows], self.z_hat[rows] = z0, z0
-            self.x_control[rows] = mv(self.predict, z0)
+            self.x_control[rows] = matvec(self.predict, z0)
 
     def estimate(self, y: np.ndarray) -> np.ndarray:
         n = self.n_state
         z_prior = self._z_prior
-        self.innovation = y - mv(self.C, z_prior)                          # y − C_a z̄
-        z_hat = z_prior + mv(self.gain, self.innovation)                   # ẑ = z̄ + L_a(…)
+        self.innovation = y - matvec(self.C, z_prior)                          # y − C_a z̄
+        z_hat = z_prior + matvec(self.gain, self.innovation)                   # ẑ = z̄ + L_a(…)
         self.z_hat = predict_only(lost_rows(y), z_prior, z_hat)
         self.x_prior, self.x_hat = z_prior[:, :n], self.z_hat[:, :n]
-        self.x_control = mv(self.predict, self.z_hat)                      # x̂_{n+d_a|n} = Π ẑ
+        self.x_control = matvec(self.predict, self.z_hat)                      # x̂_{n+d_a|n} = Π ẑ
         return self.x_control
 
     def update(self, u: np.ndarray) -> None:
-        self._z_prior = mv(self.Phi, self.z_hat) + mv(self.Gamma, u)       # z̄⁺ = Φ_a ẑ + Γ_a u
+        self._z_prior = matvec(self.Phi, self.z_hat) + matvec(self.Gamma, u)       # z̄⁺ = Φ_a ẑ + Γ_a u
 
     def select(self, rows: np.ndarray) -> None:
         super().select(rows)

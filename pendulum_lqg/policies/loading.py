@@ -143,19 +143,15 @@ def is_plugin_ref(name: str) -> bool:
 def resolve_ref(ref: str, base_dir: Path | None = None) -> str:
     """``ref`` with a relative ``file.py`` part made absolute, so a work unit finds the file
     wherever it runs: the first of ``base_dir``, the current folder and the shipped experiments
-    folder (``plugin_example.py:make`` works from an installed package) that has it. Module refs
-    are returned unchanged."""
+    folder that has it (:func:`~pendulum_lqg.util.resources.find_file`: ``plugin_example.py:make``
+    and ``experiments/plugin_example.py:make`` work from an installed package). Module refs are
+    returned unchanged."""
+    from pendulum_lqg.util.resources import find_file
+
     module, attr = _split(ref)
     if not _is_path(module):
         return ref
-    path = Path(module).expanduser()
-    if not path.is_absolute():
-        from pendulum_lqg.util.resources import data_dir
-
-        candidates = [base_dir / path] if base_dir is not None else []
-        candidates += [Path.cwd() / path, data_dir("experiments") / path]
-        path = next((c for c in candidates if c.is_file()), candidates[0])
-    return f"{path.resolve()}:{attr}"
+    return f"{find_file(module, base_dir)}:{attr}"
 
 
 def _split(ref: str) -> tuple[str, str]:

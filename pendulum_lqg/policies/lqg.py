@@ -43,7 +43,7 @@ from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.core.rules import saturate
 from pendulum_lqg.model.linearize import ContinuousModel, discretize_zoh, linearize
 from pendulum_lqg.model.plant import Plant, steps_per_period
-from pendulum_lqg.policies.estimators import Estimator, mv
+from pendulum_lqg.policies.estimators import Estimator, matvec
 from pendulum_lqg.policies.observers import (
     OBSERVER_BUILDERS,
     ObserverProblem,
@@ -93,7 +93,7 @@ class Policy:
     def act(self, y: np.ndarray) -> np.ndarray:
         """One control period: measurement (n, 2) (or state (n, 4)) → force (n,) in newtons."""
         x_hat = self.estimator.estimate(y)
-        u = saturate(-mv(self.K, x_hat), self.u_max)    # the core's rule: the observer sees u applied
+        u = saturate(-matvec(self.K, x_hat), self.u_max)    # the core's rule: the observer sees u applied
         self.estimator.update(u)
         return u[:, 0]
 

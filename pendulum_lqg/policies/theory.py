@@ -74,9 +74,10 @@ def linear_estimator(policy: Any) -> LinearEstimator:
     ``x̂ = T⁻¹[y; z + G y]``; the time-varying Kalman filter at its steady gain. Refuses
     plugins and the delay-augmented filter with one line naming the policy.
     """
+    from pendulum_lqg.core.protocol import optional_members
     from pendulum_lqg.policies import estimators as est_mod
 
-    est = getattr(policy, "estimator", None)
+    est = optional_members(policy).estimator
     name = getattr(policy, "name", repr(policy))
     if isinstance(est, est_mod.TrueState):
         z = np.zeros((0, 0))

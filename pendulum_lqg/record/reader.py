@@ -7,14 +7,11 @@ import subprocess
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
-
-if TYPE_CHECKING:
-    pass
 from pendulum_lqg.record.writer import TIMELINE
 
 

@@ -3,15 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import mujoco
 import numpy as np
 
 from pendulum_lqg.model.plant import CART_BODY, HINGE, POLE_BODY, SLIDER, Plant
-
-if TYPE_CHECKING:
-    pass
 
 SYMBOLS = {"p": "p", "theta": "θ", "p_dot": "ṗ", "theta_dot": "θ̇"}
 

@@ -227,27 +227,42 @@ def _record_scene_static(w: _Writer, plant: Plant, pre: str, *, ghost: bool) -> 
 
 def _record_episode(w: _Writer, plant: Plant, tr: Trajectory, pre: str, *, estimated: bool,
                     label: str | None, u_max: float) -> None:
-    rr = w.rr
-    ep = tr.episode
-    world = f"{pre}/world"
+    """Everything of one episode under its prefix ``pre``: the scene, the animation, the state
+    plots, the force and the running cost, the estimator's internals and the outcome."""
     _record_scene_static(w, plant, pre, ghost=estimated)
-
-    # --- 3-D animation from the true state (physics rate) and the estimate (control rate)
     t_ph, x_ph = physics_samples(tr, plant)
+    t = np.asarray(tr.t, dtype=float)
+    _record_animation(w, plant, tr, pre, t_ph, x_ph, estimated=estimated)
+    _record_states(w, tr, pre, t_ph, x_ph, estimated=estimated)
+    _record_control_and_cost(w, tr, pre, t, t_end=float(t_ph[-1]), u_max=u_max)
+    if estimated:
+        _record_estimator(w, tr, pre, t)
+    _record_outcome(w, plant, tr, pre, label, x_end=x_ph[-1], t_end=float(t_ph[-1]))
+
+
+def _record_animation(w: _Writer, plant: Plant, tr: Trajectory, pre: str, t_ph: np.ndarray,
+                      x_ph: np.ndarray, *, estimated: bool) -> None:
+    """The 3-D cart-pole from the true state (physics rate) and, as a ghost, from the estimate
+    (control rate, held)."""
+    rr, world = w.rr, f"{pre}/world"
     w.columns(f"{world}/cart", t_ph,
               rr.Transform3D.columns(translation=cart_translations(plant, x_ph[:, 0])))
     w.columns(f"{world}/cart/pole", t_ph, rr.Transform3D.columns(
         translation=np.broadcast_to(plant.model.body(POLE_BODY).pos, (t_ph.size, 3)),
         quaternion=hinge_quaternions(plant, x_ph[:, 1])))
-    t = np.asarray(tr.t, dtype=float)
     if estimated:
+        t = np.asarray(tr.t, dtype=float)
         w.columns(f"{world}/estimate", t,
                   rr.Transform3D.columns(translation=cart_translations(plant, tr.x_hat[:, 0])))
         w.columns(f"{world}/estimate/pole", t, rr.Transform3D.columns(
             translation=np.broadcast_to(plant.model.body(POLE_BODY).pos, (t.size, 3)),
             quaternion=hinge_quaternions(plant, tr.x_hat[:, 1])))
 
-    # --- state plots: true (physics rate), estimate (held), measurements (points)
+
+def _record_states(w: _Writer, tr: Trajectory, pre: str, t_ph: np.ndarray, x_ph: np.ndarray, *,
+                   estimated: bool) -> None:
+    """One plot per state: true (physics rate), estimate (held), measurement (points, p and θ)."""
+    rr, ep, t = w.rr, tr.episode, np.asarray(tr.t, dtype=float)
     for i, name in enumerate(STATE_NAMES):
         sym, base = SYMBOLS[name], f"{pre}/state/{name}"
         w.static(f"{base}/true", _lines(rr, [f"{sym} true · ep {ep}"], [TRUE_COLOR], [1.5]))
@@ -262,43 +277,54 @@ def _record_episode(w: _Writer, plant: Plant, tr: Trajectory, pre: str, *, estim
                 marker_sizes=[1.5]))
             w.scalars(f"{base}/measured", t, tr.y[:, i])
 
-    # --- control with its limits; running cost
+
+def _record_control_and_cost(w: _Writer, tr: Trajectory, pre: str, t: np.ndarray, *,
+                             t_end: float, u_max: float) -> None:
+    """The applied force with its limits ±u_max, and the running cost J(t)."""
+    rr = w.rr
     w.static(f"{pre}/control/u", _lines(rr, ["u applied"], [TRUE_COLOR], [1.5], step=True))
     w.scalars(f"{pre}/control/u", t, tr.u)
-    t_end = float(t_ph[-1])
     w.static(f"{pre}/control/limits", _lines(rr, ["+u_max", "−u_max"],
                                              [LIMIT_COLOR, LIMIT_COLOR], [1.0, 1.0]))
     w.scalars(f"{pre}/control/limits", np.array([0.0, t_end]),
               np.array([[u_max, -u_max], [u_max, -u_max]]))
     # cost[n] is J at the end of period n: t[n] + T, or the failure time for the last one
-    dt = float(t[1] - t[0]) if t.size > 1 else float(t_ph[-1])
+    dt = float(t[1] - t[0]) if t.size > 1 else t_end
     t_cost = np.concatenate([[0.0], t + dt])
     t_cost[-1] = min(t_cost[-1], t_end)
-    w.static(f"{pre}/cost/J", _lines(rr, [f"J · ep {ep}"], [(44, 160, 44)], [1.5]))
+    w.static(f"{pre}/cost/J", _lines(rr, [f"J · ep {tr.episode}"], [(44, 160, 44)], [1.5]))
     w.scalars(f"{pre}/cost/J", t_cost, np.concatenate([[0.0], tr.cost]))
 
-    # --- estimator internals
-    if estimated:
-        err = tr.x_hat - tr.x
-        P = np.asarray(tr.P, dtype=float)
-        has_cov = bool(np.all(np.isfinite(P)))
-        for i, name in enumerate(STATE_NAMES):
-            sym, path = SYMBOLS[name], f"{pre}/estimation/error/{name}"
-            if has_cov:
-                two_sigma = 2.0 * np.sqrt(np.clip(P[:, i, i], 0.0, None))
-                w.static(path, _lines(rr, [f"{sym}̂ − {sym}", "+2σ", "−2σ"],
-                                      [EST_COLOR, BAND_COLOR, BAND_COLOR], [1.2, 1.0, 1.0]))
-                w.scalars(path, t, np.stack([err[:, i], two_sigma, -two_sigma], axis=1))
-            else:
-                w.static(path, _lines(rr, [f"{sym}̂ − {sym}"], [EST_COLOR], [1.2]))
-                w.scalars(path, t, err[:, i])
-        for i, name in enumerate(("p", "theta")):
-            path = f"{pre}/estimation/innovation/{name}"
-            w.static(path, _lines(rr, [f"ν_{SYMBOLS[name]} [{UNITS[name]}]"],
-                                  [(148, 103, 189) if i else (23, 190, 207)], [1.0]))
-            w.scalars(path, t, tr.innovation[:, i])
 
-    # --- outcome
+def _record_estimator(w: _Writer, tr: Trajectory, pre: str, t: np.ndarray) -> None:
+    """The estimation error per state (with the filter's ±2σ when it has a covariance) and the
+    innovations of p and θ."""
+    rr = w.rr
+    err = tr.x_hat - tr.x
+    P = np.asarray(tr.P, dtype=float)
+    has_cov = bool(np.all(np.isfinite(P)))
+    for i, name in enumerate(STATE_NAMES):
+        sym, path = SYMBOLS[name], f"{pre}/estimation/error/{name}"
+        if has_cov:
+            two_sigma = 2.0 * np.sqrt(np.clip(P[:, i, i], 0.0, None))
+            w.static(path, _lines(rr, [f"{sym}̂ − {sym}", "+2σ", "−2σ"],
+                                  [EST_COLOR, BAND_COLOR, BAND_COLOR], [1.2, 1.0, 1.0]))
+            w.scalars(path, t, np.stack([err[:, i], two_sigma, -two_sigma], axis=1))
+        else:
+            w.static(path, _lines(rr, [f"{sym}̂ − {sym}"], [EST_COLOR], [1.2]))
+            w.scalars(path, t, err[:, i])
+    for i, name in enumerate(("p", "theta")):
+        path = f"{pre}/estimation/innovation/{name}"
+        w.static(path, _lines(rr, [f"ν_{SYMBOLS[name]} [{UNITS[name]}]"],
+                              [(148, 103, 189) if i else (23, 190, 207)], [1.0]))
+        w.scalars(path, t, tr.innovation[:, i])
+
+
+def _record_outcome(w: _Writer, plant: Plant, tr: Trajectory, pre: str, label: str | None, *,
+                    x_end: np.ndarray, t_end: float) -> None:
+    """The outcome document, and an event at the end: the failure (with a marker over the cart
+    in the scene) or the success and its J."""
+    rr, ep = w.rr, tr.episode
     w.static(f"{pre}/outcome", rr.TextDocument(outcome_markdown(tr, label),
                                                media_type=rr.MediaType.MARKDOWN))
     ttf = float(tr.row.get("time_to_failure", np.nan))  # type: ignore[arg-type]
@@ -306,9 +332,8 @@ def _record_episode(w: _Writer, plant: Plant, tr: Trajectory, pre: str, *, estim
         reason = str(tr.row.get("failure_reason", "failed"))
         w.log_at(f"{pre}/events", ttf, rr.TextLog(f"episode {ep} failed: {reason} at "
                                                   f"t = {ttf:.3f} s", level=rr.TextLogLevel.ERROR))
-        x_f = x_ph[-1]
-        w.log_at(f"{world}/failure", ttf, rr.Points3D(
-            [cart_translations(plant, x_f[:1])[0] + [0.0, 0.0, plant.pole_length + 0.2]],
+        w.log_at(f"{pre}/world/failure", ttf, rr.Points3D(
+            [cart_translations(plant, x_end[:1])[0] + [0.0, 0.0, plant.pole_length + 0.2]],
             radii=[0.05],
             colors=[LIMIT_COLOR], labels=[f"{reason} @ {ttf:.3f} s"], show_labels=True))
     else:
@@ -394,6 +419,49 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
     """
     if path is None and not spawn:
         raise ConfigError("record: give a path to write and/or spawn=True")
+    trajectories, by_episode = _checked_trajectories(trajectories, labels)
+    t_start = time.perf_counter()
+    import rerun as rr
+
+    estimated = not policy.needs_state
+    covariance = estimated and all(bool(np.all(np.isfinite(tr.P))) for tr in trajectories)
+    prefixes = _prefixes(trajectories, by_episode)
+    blueprint = _blueprint(prefixes, estimated=estimated, covariance=covariance, eye=eye(plant))
+    rec = rr.RecordingStream(application_id)
+    out_path = recording_path(path) if path is not None else None
+    viewer, viewer_note = _open_sinks(rr, rec, out_path, spawn=spawn, blueprint=blueprint)
+    rec.send_recording_name(f"{policy.name}: {len(trajectories)} episode(s)")
+
+    w = _Writer(rr, rec)
+    for entity, text in (("/config", config_markdown(plant, scenario, policy, config)),
+                         ("/summary", summary_markdown(trajectories, by_episode))):
+        w.static(entity, rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN))
+    for pre, tr, label in prefixes:
+        _record_episode(w, plant, tr, pre, estimated=estimated, label=label, u_max=plant.u_max)
+    viewer_reached: bool | None = None if not spawn else viewer
+    note = _flush(rec, viewer)
+    if note is not None:
+        viewer_reached, viewer_note = False, note
+    seconds = time.perf_counter() - t_start
+    size = out_path.stat().st_size if out_path is not None and out_path.exists() else 0
+    return RecordingStats(episodes=len(trajectories), entities=len(w.entities), rows=w.rows,
+                          seconds=seconds, seconds_logging=w.seconds, path=out_path, bytes=size,
+                          viewer_reached=viewer_reached, viewer_note=viewer_note)
+
+
+def _prefixes(trajectories: list[Trajectory], by_episode: dict[int, str],
+              ) -> list[tuple[str, Trajectory, str | None]]:
+    """Each trajectory with its entity prefix (episode numbers of one width, at least four digits)
+    and its label."""
+    width = max(4, len(str(max(int(tr.episode) for tr in trajectories))))
+    return [(episode_prefix(tr.episode, width), tr, by_episode.get(int(tr.episode)))
+            for tr in trajectories]
+
+
+def _checked_trajectories(trajectories: Sequence[Trajectory], labels: Mapping[str, int] | None,
+                          ) -> tuple[list[Trajectory], dict[int, str]]:
+    """The trajectories as a list (at least one, episode numbers distinct) and the labels per
+    episode (``"worst, first failing"`` when an episode has several)."""
     trajectories = list(trajectories)
     if not trajectories:
         raise ConfigError("trajectories: expected at least one trajectory, got none")
@@ -404,19 +472,13 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
     by_episode: dict[int, str] = {}
     for lab, e in (labels or {}).items():
         by_episode[int(e)] = f"{by_episode[int(e)]}, {lab}" if int(e) in by_episode else str(lab)
+    return trajectories, by_episode
 
-    t_start = time.perf_counter()
-    import rerun as rr
 
-    estimated = not policy.needs_state
-    covariance = estimated and all(bool(np.all(np.isfinite(tr.P))) for tr in trajectories)
-    width = max(4, len(str(max(episodes))))
-    prefixes = [(episode_prefix(tr.episode, width), tr, by_episode.get(int(tr.episode)))
-                for tr in trajectories]
-    blueprint = _blueprint(prefixes, estimated=estimated, covariance=covariance, eye=eye(plant))
-
-    rec = rr.RecordingStream(application_id)
-    out_path = recording_path(path) if path is not None else None
+def _open_sinks(rr: Any, rec: Any, out_path: Path | None, *, spawn: bool, blueprint: Any,
+                ) -> tuple[bool, str | None]:
+    """Point ``rec`` at the file ``out_path`` and, with ``spawn``, at a viewer it starts:
+    ``(viewer reached, why not)``. Without a file, a viewer that cannot start is an error."""
     if out_path is not None:
         out_path.parent.mkdir(parents=True, exist_ok=True)
     viewer_note: str | None = None
@@ -433,29 +495,21 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
     else:
         assert out_path is not None
         rec.save(str(out_path), default_blueprint=blueprint)
-    rec.send_recording_name(f"{policy.name}: {len(trajectories)} episode(s)")
+    return viewer, viewer_note
 
-    w = _Writer(rr, rec)
-    w.static("/config", rr.TextDocument(config_markdown(plant, scenario, policy, config),
-                                        media_type=rr.MediaType.MARKDOWN))
-    w.static("/summary", rr.TextDocument(summary_markdown(trajectories, by_episode),
-                                         media_type=rr.MediaType.MARKDOWN))
-    for pre, tr, label in prefixes:
-        _record_episode(w, plant, tr, pre, estimated=estimated, label=label, u_max=plant.u_max)
-    viewer_reached: bool | None = None if not spawn else viewer
+
+def _flush(rec: Any, viewer: bool) -> str | None:
+    """Flush and close the stream: ``None``, or why a spawned viewer did not take the data. To a
+    viewer within :data:`SPAWN_FLUSH_TIMEOUT` s: one that accepted the connection but stalls
+    must not block an unbounded flush."""
+    note = None
     if viewer:
-        # a viewer that accepted the connection but stalls must not block an unbounded flush
         try:
             rec.flush(timeout_sec=SPAWN_FLUSH_TIMEOUT)
         except RuntimeError as exc:
-            viewer_reached = False
-            viewer_note = (f"the Rerun viewer did not take the recording within "
-                           f"{SPAWN_FLUSH_TIMEOUT:g} s ({' '.join(str(exc).split())[:120]})")
+            note = (f"the Rerun viewer did not take the recording within "
+                    f"{SPAWN_FLUSH_TIMEOUT:g} s ({' '.join(str(exc).split())[:120]})")
     else:
         rec.flush()
     rec.disconnect()
-    seconds = time.perf_counter() - t_start
-    size = out_path.stat().st_size if out_path is not None and out_path.exists() else 0
-    return RecordingStats(episodes=len(trajectories), entities=len(w.entities), rows=w.rows,
-                          seconds=seconds, seconds_logging=w.seconds, path=out_path, bytes=size,
-                          viewer_reached=viewer_reached, viewer_note=viewer_note)
+    return note

@@ -23,6 +23,7 @@ from typing import Any, Protocol
 import gymnasium as gym
 import numpy as np
 
+from pendulum_lqg.core.protocol import optional_members
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.seeding import episode_seeds
 from pendulum_lqg.envs.registration import ENV_ID, register_envs
@@ -70,7 +71,7 @@ def _batch_rows(suite: Suite, policy: str, *, base_dir: Path | None, nthread: in
     scenario = suite.config.scenario
     built = build_policy(policy, plant=nominal, scenario=scenario, base_dir=base_dir)
     if check:
-        _check_observation(suite, policy, bool(getattr(built, "needs_state", False)))
+        _check_observation(suite, policy, optional_members(built).needs_state)
     res = run_episodes(simulated, scenario, built, seed=suite.seed, episodes=range(suite.episodes),
                        nthread=nthread)
     return [{"episode": r["episode"], "seed": r["seed"], "success": r["success"],
@@ -138,7 +139,7 @@ class PluginAgent:
             raise ConfigError(f"agent {ref!r}: a plug-in acts in newtons; score it on an env "
                               "without normalize_action")
         _check_observation_mode(ref, base.observation_mode,
-                                bool(getattr(self.policy, "needs_state", False)))
+                                optional_members(self.policy).needs_state)
 
     def reset(self) -> None:
         self.policy.reset(1)

@@ -219,9 +219,11 @@ class LinearFactory:
 def linear_agent(path_text: str) -> LinearFactory:
     """The factory of ``linear:FILE.json``, its file checked."""
     from pendulum_lqg.boundary.schemas import linear_controller
+    from pendulum_lqg.util.resources import TRAINED_MODELS_NOTE
 
     if not Path(path_text).is_file():
-        raise ConfigError(f"agent: linear:{path_text}: no such controller file")
+        raise ConfigError(f"agent: linear:{path_text}: no such controller file "
+                          f"({TRAINED_MODELS_NOTE})")
     return LinearFactory(path_text, linear_controller(path_text, where_text="agent"))
 
 

@@ -178,8 +178,10 @@ def rl_versions() -> dict[str, str]:
 
 def sb3_agent(path_text: str) -> SB3Factory:
     """The agent factory of ``sb3:PATH.zip`` (see :class:`SB3Factory`)."""
+    from pendulum_lqg.util.resources import TRAINED_MODELS_NOTE
+
     path = Path(path_text)
     if not path.is_file():
-        raise ConfigError(f"agent: sb3:{path_text}: no such model file")
+        raise ConfigError(f"agent: sb3:{path_text}: no such model file ({TRAINED_MODELS_NOTE})")
     meta = read_metadata(path)
     return SB3Factory(path_text, meta, load_model(path, meta["algo"]))

@@ -189,15 +189,25 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
                               "got ''")
         name, kind = policy, ("plugin" if is_plugin_ref(policy) else "builtin")
         run, extra_versions = _run_of(None)
-
-        def rows_of(s: Suite) -> list[dict[str, Any]]:
-            if kind == "builtin" and policy == s.reference:   # the reference itself: one run
-                return reference_of(s)
-            return ep.policy_rows(s, policy, base_dir=base_dir, nthread=nthread)
-
+        rows_of = _policy_rows_of(policy, kind, reference_of, base_dir, nthread)
     doc = score_document(name, kind, suites, rows_of, reference_of, bound_of,
                          {**versions(), **extra_versions}, on_suite, run)
     return doc if noise_scale is None else {**doc, "noise_scale": noise_scale}
+
+
+def _policy_rows_of(policy: str, kind: str, reference_of: Callable[[Suite], list[dict[str, Any]]],
+                    base_dir: Path | None, nthread: int | None,
+                    ) -> Callable[[Suite], list[dict[str, Any]]]:
+    """The rows of a built-in or plug-in ``policy`` on a suite (the batch path); the suite's
+    reference itself is the reference's one run."""
+    from pendulum_lqg.scoreboard import episodes as ep
+
+    def rows_of(s: Suite) -> list[dict[str, Any]]:
+        if kind == "builtin" and policy == s.reference:
+            return reference_of(s)
+        return ep.policy_rows(s, policy, base_dir=base_dir, nthread=nthread)
+
+    return rows_of
 
 
 def _run_of(factory: Any) -> tuple[dict[str, Any] | None, dict[str, str]]:

@@ -1,10 +1,13 @@
 """The data files the package ships: cart-pole models and experiment files.
 
 The sources live in the repository's top-level ``models/`` and ``experiments/`` folders; the wheel
-carries copies as package data under ``pendulum_lqg/_data/`` (``[tool.hatch.build.targets.wheel.
-force-include]`` in ``pyproject.toml``). Both are read through :mod:`importlib.resources`, so an
-installed package finds its files from any working directory, and a source checkout (an editable
-install) uses the top-level folders directly.
+carries copies as package data under ``pendulum_lqg/_data/`` (``[tool.hatch.build.targets.wheel]``'s
+``include`` and ``sources`` in ``pyproject.toml``): the model, the experiment, suite and LTI files
+and the example plug-ins and agents, but not the trained models (``experiments/agents/models``,
+``experiments/agents/pilot``). Both are read through :mod:`importlib.resources`, so an installed
+package finds its files from any working directory, and a source checkout (an editable install)
+uses the top-level folders directly. :func:`find_file` is the one rule by which a path a user
+gives (``experiments/plugin_lqg.py``, as the docs write it) falls back to the shipped copy.
 """
 
 from __future__ import annotations
@@ -49,3 +52,25 @@ def experiment_path(name: str) -> Path | None:
     """Path of the shipped experiment ``NAME.toml``, or ``None`` if there is none."""
     path = data_dir("experiments") / f"{name}.toml"
     return path if path.is_file() else None
+
+
+#: Why a trained model (``sb3:``/``linear:``) named by a path may be missing: the wheel leaves them out.
+TRAINED_MODELS_NOTE = ("trained models are not shipped in the wheel; give the path of a model "
+                       "file, e.g. in a source checkout's experiments/agents/models/")
+
+
+def find_file(path: str | Path, base_dir: Path | None = None) -> Path:
+    """A user's file path made absolute: the first of ``base_dir / path``, the current folder's
+    ``path`` and the shipped copy that is a file, else the first of these (for the caller's "no
+    file" error). The shipped copy of ``experiments/X`` (as the docs write it, from a checkout's
+    root) or of a bare ``X`` is ``X`` in the shipped experiments folder, so that the paths the
+    docs show work from an installed wheel in any folder. An absolute path is returned as given."""
+    path = Path(path).expanduser()
+    if path.is_absolute():
+        return path
+    relative = Path(*path.parts[1:]) if path.parts[:1] == ("experiments",) else path
+    candidates = [base_dir / path] if base_dir is not None else []
+    candidates += [Path.cwd() / path]
+    if relative.parts:
+        candidates.append(data_dir("experiments") / relative)
+    return next((c for c in candidates if c.is_file()), candidates[0]).resolve()

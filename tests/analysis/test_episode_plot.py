@@ -18,15 +18,9 @@ from pendulum_lqg import Scenario, run_episodes
 from pendulum_lqg.analysis.episode_plot import STATE_LABELS, plot_episode
 from pendulum_lqg.cli import main
 from pendulum_lqg.core.rules import saturate
-from pendulum_lqg.model.plant import load_plant
 from pendulum_lqg.policies.loading import build_policy
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant()
 
 
 def _episode(plant, name, **scenario):

@@ -7,12 +7,10 @@ import math
 
 import numpy as np
 import pytest
+from conftest import stationary_monte_carlo
 
-from pendulum_lqg.core.loop import Simulator
 from pendulum_lqg.core.scenario import Scenario
-from pendulum_lqg.core.seeding import episode_generators, episode_seeds
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.model.plant import load_plant
 from pendulum_lqg.policies.loading import build_policy
 from pendulum_lqg.policies.theory import (
     LinearEstimator,
@@ -24,11 +22,6 @@ from pendulum_lqg.policies.theory import (
 
 INF = float("inf")
 STATES = ("p", "theta", "p_dot", "theta_dot")
-
-
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant()
 
 
 def _free(plant_kind: str = "linear-zoh", duration: float = 10.0) -> Scenario:
@@ -122,28 +115,11 @@ def test_theory_refuses_what_it_does_not_model(plant):
 # ---- Monte Carlo of the linear plant, limits off ----------------------------------------------
 def _stationary_monte_carlo(plant, scenario, policy, *, episodes: int, burn_in: float,
                             seed: int) -> dict[str, tuple[float, float]]:
-    """Per-episode time averages of x², u² and (x̂ − x)² at the sampling instants after
-    ``burn_in`` seconds; their mean over the episodes and its standard error (episodes are
-    independent, so the interval holds whatever the correlation within an episode)."""
-    gens = episode_generators(episode_seeds(seed, range(episodes)))
-    sums = np.zeros((episodes, 9))
-    burn = round(burn_in / scenario.control_period)
-    with Simulator(plant, scenario, backend="step", streamed_metrics=False) as sim:
-        x0 = sim.reset(gens, private_generators=True)
-        policy.reset(episodes, x_hat0=x0.copy())
-        for n in range(sim.n_periods):
-            y = sim.measure()
-            x = sim.x.copy()
-            u = policy.act(y)
-            if n >= burn:
-                sums[:, :4] += x * x
-                sums[:, 4] += u * u
-                sums[:, 5:] += (policy.x_hat - x) ** 2
-            res = sim.step(u)
-            assert not res.failed.any()            # every limit is off
-    per_episode = sums / (sim.n_periods - burn)
+    """:func:`conftest.stationary_monte_carlo` on the ``step`` backend, by name: the mean and
+    standard error of each of p², …, u², (p̂ − p)², …"""
+    mean, se = stationary_monte_carlo(plant, scenario, policy, episodes=episodes,
+                                      burn_in=burn_in, seed=seed, backend="step")
     names = [*STATES, "u", *(f"err_{s}" for s in STATES)]
-    mean, se = per_episode.mean(axis=0), per_episode.std(axis=0, ddof=1) / math.sqrt(episodes)
     return {k: (float(m), float(s)) for k, m, s in zip(names, mean, se, strict=True)}
 
 

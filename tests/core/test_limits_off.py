@@ -11,14 +11,8 @@ from pendulum_lqg.core.loop import Simulator
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import episode_generators
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.model.plant import load_plant
 
 INF = float("inf")
-
-
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant()
 
 
 def test_limits_default_to_the_model_and_accept_inf(plant):

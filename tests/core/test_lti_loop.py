@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import stationary_monte_carlo
 
 from pendulum_lqg.core.layout import layout
 from pendulum_lqg.core.loop import Simulator
@@ -38,29 +39,6 @@ def _scenario(plant, duration: float, **kw) -> Scenario:
                     **kw)
 
 
-def _stationary_monte_carlo(plant, scenario, policy, *, episodes: int, burn_in: float, seed: int):
-    """Per-episode time averages of x², u² and (x̂ − x)² at the samples after ``burn_in``
-    seconds; their mean over the episodes and its standard error (episodes are independent)."""
-    n = plant.n_states
-    gens = episode_generators(episode_seeds(seed, range(episodes)))
-    sums = np.zeros((episodes, 2 * n + 1))
-    burn = round(burn_in / scenario.control_period)
-    with Simulator(plant, scenario, streamed_metrics=False) as sim:
-        x0 = sim.reset(gens, private_generators=True)
-        policy.reset(episodes, x_hat0=x0.copy())
-        for k in range(sim.n_periods):
-            y = sim.measure()
-            x = sim.x.copy()
-            u = policy.act(y)
-            if k >= burn:
-                sums[:, :n] += x * x
-                sums[:, n] += u * u
-                sums[:, n + 1:] += (policy.x_hat - x) ** 2
-            assert not sim.step(u).failed.any()          # no limit declared: none can fire
-    per = sums / (sim.n_periods - burn)
-    return per.mean(axis=0), per.std(axis=0, ddof=1) / math.sqrt(episodes)
-
-
 @pytest.mark.parametrize("name", ["dlqr+kalman", "dlqr+luenberger"])
 def test_double_integrator_monte_carlo_agrees_with_theory(double_integrator, name):
     """400 episodes × 40 s after a 10 s burn-in (7 time constants of the slowest pole, |z| =
@@ -69,7 +47,7 @@ def test_double_integrator_monte_carlo_agrees_with_theory(double_integrator, nam
     plant = double_integrator
     scenario = _scenario(plant, 50.0, estimate0="true")
     policy = design_lti_policy(plant, name)
-    mean, se = _stationary_monte_carlo(plant, scenario, policy, episodes=400, burn_in=10.0,
+    mean, se = stationary_monte_carlo(plant, scenario, policy, episodes=400, burn_in=10.0,
                                        seed=5)
     th = lti_theory(plant, (name,))[name]
     expected = np.array([*(th.std[s] ** 2 for s in plant.state_names), th.u_std ** 2,

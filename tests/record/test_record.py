@@ -16,7 +16,7 @@ from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.trajectory import Trajectory
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.model.plant import STATE_NAMES, load_plant
+from pendulum_lqg.model.plant import STATE_NAMES
 from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 from pendulum_lqg.record import (
     episode_prefix,
@@ -29,11 +29,6 @@ from pendulum_lqg.record import (
 )
 
 SEED = 0
-
-
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant()
 
 
 @pytest.fixture(scope="module")
