@@ -132,3 +132,18 @@ def interruptible_cli(*args):
     """The command line of ``python -m pendulum_lqg.cli ARGS`` that a SIGINT interrupts."""
     import sys
     return [sys.executable, "-c", _INTERRUPTIBLE_CLI, *map(str, args)]
+
+
+def load_benchmark_script(stem: str, alias: str):
+    """The module of ``benchmarks/STEM.py`` (a script, not a package module), imported under
+    ``alias`` and kept in ``sys.modules`` so that pickling and relative lookups find it."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{stem}.py"
+    spec = importlib.util.spec_from_file_location(alias, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[alias] = module
+    spec.loader.exec_module(module)
+    return module

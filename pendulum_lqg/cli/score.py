@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -54,30 +55,25 @@ def add_parsers(sub: Any, positive_int: Any) -> None:
                    help="write the table to FILE too (a new path or a regular file)")
 
 
-def _seconds(text: str) -> float:
-    """argparse type: a finite number of seconds ≥ 0."""
-    import math
+def _finite_at_least_zero(what: str) -> Callable[[str], float]:
+    """argparse type: a finite number ≥ 0 (``what`` names it in the error: "number of seconds")."""
 
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"expected a finite number of seconds ≥ 0, got {text!r}")
-    return value
+    def parse(text: str) -> float:
+        import math
+
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if not math.isfinite(value) or value < 0:
+            raise argparse.ArgumentTypeError(f"expected a finite {what} ≥ 0, got {text!r}")
+        return value
+
+    return parse
 
 
-def _noise_scale(text: str) -> float:
-    """argparse type: a finite number ≥ 0."""
-    import math
-
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"expected a finite number ≥ 0, got {text!r}")
-    return value
+_seconds = _finite_at_least_zero("number of seconds")
+_noise_scale = _finite_at_least_zero("number")
 
 
 def add_call_timeout(p: argparse.ArgumentParser) -> None:

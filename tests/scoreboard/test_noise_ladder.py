@@ -4,12 +4,11 @@ in each group."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import pytest
+from conftest import load_benchmark_script
 
 from pendulum_lqg.cli import main
 
@@ -18,12 +17,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 @pytest.fixture(scope="module")
 def ladder():
-    spec = importlib.util.spec_from_file_location("noise_ladder",
-                                                  ROOT / "benchmarks" / "noise_ladder.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["noise_ladder"] = module
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark_script("noise_ladder", "noise_ladder")
 
 
 def test_the_ladder_scores_are_the_score_commands_files_and_make_a_table(ladder, tmp_path,

@@ -4,13 +4,12 @@ learning curves' median and interquartile range are those of the seeds, by hand.
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import load_benchmark_script
 
 from pendulum_lqg.scoreboard import stats
 
@@ -20,11 +19,7 @@ FINGERPRINTS = {"lecture": "a" * 64, "lossy": "b" * 64, "full-state": "c" * 64}
 
 @pytest.fixture(scope="module")
 def rl_figures():
-    spec = importlib.util.spec_from_file_location("rl_figures", ROOT / "benchmarks" / "rl_figures.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["rl_figures"] = module
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark_script("rl_figures", "rl_figures")
 
 
 def _entry(suite, score, applicable=True):

@@ -3,23 +3,17 @@ file names and the refusal of bad numbers (nothing is trained here)."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
+from conftest import load_benchmark_script
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
 def train_agents():
-    spec = importlib.util.spec_from_file_location("train_agents_cli",
-                                                  ROOT / "benchmarks" / "train_agents.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["train_agents_cli"] = module
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark_script("train_agents", "train_agents_cli")
 
 
 def test_list_names_every_method_with_its_budget(train_agents, capsys):
