@@ -69,12 +69,15 @@ def _chunk(suite: Suite, factory: Any, seeds: list[int], first: int, normalized:
     state: Any = None
     starts = np.ones(n, dtype=bool)
     out: list[dict[str, Any] | None] = [None] * n
+    running = np.ones(n, dtype=bool)             # rows whose episode has not ended yet
     try:
-        while any(r is None for r in out):
+        while running.any():
             actions, state = _predict(factory, normalise(stack, meta["obs_norm"]), state, starts)
             obs, _, terminated, truncated, info = env.step(actions)
             starts[:] = False
-            for i in np.nonzero((terminated | truncated) & np.array([r is None for r in out]))[0]:
+            ended = (terminated | truncated) & running
+            running &= ~ended
+            for i in np.nonzero(ended)[0]:
                 out[i] = {"episode": first + int(i), "seed": seeds[i],
                           "success": not bool(terminated[i]),
                           "failure_reason": str(info["failure_reason"][i]),
