@@ -78,9 +78,8 @@ def score_suite(where: Where, data: Any) -> dict[str, Any]:
         out["reason"] = where.get(data, "reason", any_text, default="")
         return out
     out.update(_figures(where, data, gap=True))
-    if "score_mean" in data:            # files before the failure-aware score lack it: the board
-        out["score_mean"] = where.get(data, "score_mean", _COST)        # computes it from rows
-        out["score_ci"] = where.get(data, "score_ci", list_of(_COST, 2), default=[None, None])
+    out["score_mean"] = where.get(data, "score_mean", _COST)
+    out["score_ci"] = where.get(data, "score_ci", list_of(_COST, 2))
     if "rows" in data:
         out["rows"] = where.get(data, "rows", list_of(_score_row))
     for key in ("reference", "full_state_bound"):

@@ -2,9 +2,8 @@
 
 One row per entry, one column group per suite — success rate, mean J of the successes, optimality
 gap to the suite's reference, failure-aware score (:mod:`pendulum_lqg.scoreboard.stats`) — and a
-row per suite's reference and full-state bound underneath. A score file made before the
-failure-aware score has no ``score_mean``: the board computes it from the entry's ``rows`` and the
-rows of the suite's reference in its own score file in the folder (``n/a`` without one).
+row per suite's reference and full-state bound underneath. The failure-aware score is the one
+``score`` stored (``n/a`` where the reference survived no episode, so it is undefined).
 
 Score files that carry a ``method`` (the training runs of one method, one file per training seed:
 ``benchmarks/train_agents.py`` writes the method and seed into the training record, and ``score
@@ -27,7 +26,7 @@ import numpy as np
 
 from pendulum_lqg.boundary.schemas import SCORE_VERSION, score_file
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.scoreboard.stats import aggregate, failure_aware_figures
+from pendulum_lqg.scoreboard.stats import aggregate
 from pendulum_lqg.scoreboard.suites import SUITE_ORDER
 
 Scores = list[tuple[Path, dict[str, Any]]]
@@ -88,26 +87,6 @@ def _score(entry: dict[str, Any]) -> str:
         return "n/a"
     lo, hi = entry.get("score_ci", [None, None])
     return f"{mean:.2f}" + ("" if lo is None else f" [{lo:.2f}, {hi:.2f}]")
-
-
-def _with_scores(scores: Scores, prints: dict[str, str]) -> None:
-    """Give every comparable entry without a ``score_mean`` the one its rows and its reference's
-    rows give (see the module docstring); ``None`` where either is missing."""
-    reference_rows: dict[tuple[str, str], list[dict[str, Any]]] = {}
-    for _, d in scores:
-        for s, e in d["suites"].items():
-            if e.get("fingerprint") == prints.get(s) and e.get("applicable", True) and "rows" in e:
-                reference_rows.setdefault((s, d["policy"]), e["rows"])
-    for _, d in scores:
-        for s, e in d["suites"].items():
-            if "score_mean" in e or not e.get("applicable", True) or e["fingerprint"] != prints[s]:
-                continue
-            ref = reference_rows.get((s, e["reference"]["policy"]))
-            try:
-                e.update(failure_aware_figures(e["rows"], ref) if ref and "rows" in e
-                         else {"score_mean": None, "score_ci": [None, None]})
-            except ValueError:          # an episode the reference's file does not have
-                e.update({"score_mean": None, "score_ci": [None, None]})
 
 
 def _aggregate(values: list[float | None], fmt: Callable[[float], str]) -> str:
@@ -204,13 +183,11 @@ def board_scores(folder: Path, *, skipped: list[str] | None = None,
                  ) -> tuple[Scores, list[str], dict[str, str]]:
     """The score files of ``folder`` (:func:`read_scores`), the suites they hold in
     :data:`~pendulum_lqg.scoreboard.suites.SUITE_ORDER`, and the board's fingerprint of each
-    (:func:`board_fingerprints`); every comparable entry has its ``score_mean`` (computed from
-    its rows where an older file has none)."""
+    (:func:`board_fingerprints`)."""
     scores = read_scores(folder, skipped=skipped)
     names = {n for _, d in scores for n in d["suites"]}
     suites = [n for n in SUITE_ORDER if n in names] + sorted(names - set(SUITE_ORDER))
     prints = board_fingerprints(scores, suites)
-    _with_scores(scores, prints)
     return scores, suites, prints
 
 

@@ -24,11 +24,14 @@ def _rows(costs, success):
              "cost": c} for i, (c, s) in enumerate(zip(costs, success, strict=True))]
 
 
-def _file(folder, name, policy, rows, **top):
+def _file(folder, name, policy, rows, reference_rows=None, **top):
+    """A one-suite score file; its failure-aware score against ``reference_rows`` (default: its
+    own rows, so that every survived episode scores 1), as ``score`` stores it."""
     ok = [r for r in rows if r["success"]]
     figures = {"success_rate": 1.0, "cost_mean": 2.0}
     entry = {"applicable": True, "fingerprint": FINGERPRINT, "episodes": len(rows),
              "success_rate": len(ok) / len(rows), "cost_mean": 2.0, "optimality_gap": None,
+             **stats.failure_aware_figures(rows, reference_rows or rows),
              "reference": {"policy": "dlqr+kalman", **figures},
              "full_state_bound": {"policy": "dlqr+none", **figures}, "rows": rows}
     doc = {"policy": policy, "kind": "agent", "score_version": 1, **top,
@@ -63,36 +66,38 @@ def test_a_suite_entry_carries_the_failure_aware_score_and_the_reference_scores_
     assert suite_score(suite, ref, ref, ref)["score_ci"] == [1.0, 1.0]
 
 
-def test_board_computes_the_score_from_rows_as_the_score_file_stores_it(tmp_path):
+def test_board_shows_the_stored_score_and_skips_a_file_without_one(tmp_path):
     ref = _rows(REF_COSTS, REF_OK)
     _file(tmp_path, "ref.json", "dlqr+kalman", ref)
     rows = _rows([2.0, 3.0, 8.0 / 3, 1.0], [True, False, True, True])
-    _file(tmp_path, "old.json", "old-entry", rows)                  # no score_mean: from rows
-    stored = {"score_mean": 0.123, "score_ci": [0.1, 0.2]}
-    e = _file(tmp_path, "new.json", "new-entry", rows)
-    e.update(stored)
-    doc = json.loads((tmp_path / "new.json").read_text())
-    doc["suites"]["lecture"].update(stored)
-    (tmp_path / "new.json").write_text(json.dumps(doc))
-    table = make_board(tmp_path)
+    _file(tmp_path, "new.json", "new-entry", rows, reference_rows=ref)
     fig = stats.failure_aware_figures(rows, ref)
     lo, hi = fig["score_ci"]
-    assert _line(table, "| `old-entry` |").endswith(f"| 1.38 [{lo:.2f}, {hi:.2f}] |")
     assert fig["score_mean"] == pytest.approx(1.375)
-    assert _line(table, "| `new-entry` |").endswith("| 0.12 [0.10, 0.20] |")    # stored wins
+    table = make_board(tmp_path)
+    assert _line(table, "| `new-entry` |").endswith(f"| 1.38 [{lo:.2f}, {hi:.2f}] |")
     # the reference against itself: 1 where it survived, 0 on its failed episode 2
     assert "| 0.75 [" in _line(table, "| `dlqr+kalman` |")
-    (tmp_path / "ref.json").unlink()                      # no reference rows in the folder: n/a
-    assert _line(make_board(tmp_path), "| `old-entry` |").endswith("| n/a |")
+    _file(tmp_path, "undefined.json", "no-survivor", rows,
+          reference_rows=_rows(REF_COSTS, [False] * 4))          # no reference survivor: null
+    assert _line(make_board(tmp_path), "| `no-survivor` |").endswith("| n/a |")
+    doc = json.loads((tmp_path / "new.json").read_text())
+    del doc["suites"]["lecture"]["score_mean"]                   # a file without the score
+    (tmp_path / "new.json").write_text(json.dumps(doc))
+    warned: list[str] = []
+    table = make_board(tmp_path, warn=warned.append)
+    assert "| `new-entry` |" not in table
+    assert warned == ["board: skipped new.json: suites.lecture.score_mean: missing"]
 
 
 def test_board_aggregates_the_runs_of_a_method_by_iqm_with_stratified_bootstrap(tmp_path):
-    _file(tmp_path, "ref.json", "dlqr+kalman", _rows(REF_COSTS, [True] * 4))
+    ref = _rows(REF_COSTS, [True] * 4)
+    _file(tmp_path, "ref.json", "dlqr+kalman", ref)
     # four runs; successes 0, 1, 2, 3 of 4 episodes → IQM of {0, .25, .5, .75} = mean(.25, .5)
     for seed in range(4):
         ok = [i < seed for i in range(4)]
         _file(tmp_path, f"ppo-{seed}.json", f"sb3:m/ppo-history-seed{seed}.zip",
-              _rows(REF_COSTS, ok), method="ppo-history", seed=seed)
+              _rows(REF_COSTS, ok), ref, method="ppo-history", seed=seed)
     _file(tmp_path, "ppo-again.json", "sb3:m/copy.zip", _rows(REF_COSTS, [True] * 4),
           method="ppo-history", seed=2)                                # the same run again
     table = make_board(tmp_path)

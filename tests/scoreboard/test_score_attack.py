@@ -150,6 +150,7 @@ def _entry(fingerprint="f" * 64):
     figures = {"success_rate": 1.0, "cost_mean": 2.0}
     return {"applicable": True, "fingerprint": fingerprint, "episodes": 4, "success_rate": 0.75,
             "cost_mean": 2.5, "optimality_gap": 0.25, "gap_ci": [0.1, 0.4],
+            "score_mean": 0.7, "score_ci": [0.5, 0.9],
             "reference": {"policy": "dlqr+kalman", **figures},
             "full_state_bound": {"policy": "dlqr+none", **figures}}
 
