@@ -53,11 +53,14 @@ def test_every_policy_stabilises_the_noise_free_case(plant, controller, observer
     assert row["settling_time"] < 15.0
 
 
-def test_luenberger_default_poles_fail_under_the_lecture_noise(plant):
+@pytest.mark.parametrize("episodes", [
+    pytest.param(24, id="24"),                                    # the quick loop's sample
+    pytest.param(100, id="100", marks=pytest.mark.slow)])         # the statistic
+def test_luenberger_default_poles_fail_under_the_lecture_noise(plant, episodes):
     """The deliberately slow default observer cannot hold the pole under the lecture noise."""
-    s = summarize(_run(plant, LECTURE, "dlqr", "luenberger", 100).rows)
+    s = summarize(_run(plant, LECTURE, "dlqr", "luenberger", episodes).rows)
     assert s["success_rate"] < 0.2
-    kal = summarize(_run(plant, LECTURE, "dlqr", "kalman", 100).rows)
+    kal = summarize(_run(plant, LECTURE, "dlqr", "kalman", episodes).rows)
     assert kal["rms_est_err_theta"]["mean"] < 0.5 * s["rms_est_err_theta"]["mean"]
 
 
@@ -158,7 +161,10 @@ def test_rollout_chunks_are_a_multiple_of_the_threads():
     assert rollout_chunk(640, 4, 10) == 32                # 20 chunks: five per thread
 
 
-def test_force_noise_paths_agree_and_kalman_stabilises(plant):
+@pytest.mark.parametrize("episodes", [
+    pytest.param(24, id="24"),                                    # the quick loop's sample
+    pytest.param(100, id="100", marks=pytest.mark.slow)])         # the statistic
+def test_force_noise_paths_agree_and_kalman_stabilises(plant, episodes):
     noise = NoiseModel(process="force", process_density=(1e-3, 1e-4), measurement_variance=1e-4)
     sc = LECTURE.replace(noise=noise, duration=4.0)
     pol = lambda: design_policy(plant, sc.control_period, noise, DesignSpec("dlqr", "kalman"))  # noqa: E731
@@ -168,7 +174,7 @@ def test_force_noise_paths_agree_and_kalman_stabilises(plant):
     single_row = [run_episodes(plant, sc, pol(), seed=1, episodes=[e]).rows[0] for e in range(3)]
     assert _dump(batch) == _dump(single) == _dump(single_row)
     s = summarize(run_episodes(plant, sc.replace(duration=10.0), pol(), seed=2,
-                               episodes=range(100)).rows)
+                               episodes=range(episodes)).rows)
     assert s["success_rate"] >= 0.99
 
 

@@ -390,6 +390,7 @@ def test_item12_a_plugin_whose_act_waits_on_a_lock_is_stopped_in_run(tmp_path, c
     assert_one_line_error(status, err, f"policy '{ref}': act has not returned after 1 s")
 
 
+@pytest.mark.slow           # waits out the watchdog's 5 s grace; the interruptible case stays quick
 def test_item12_a_call_that_cannot_be_interrupted_ends_the_process_with_the_line(tmp_path):
     # SIGALRM blocked inside act: the handler never runs, as in C code that never returns
     ref = _agent(tmp_path, _SITES["act"].format(
