@@ -182,7 +182,8 @@ def test_study_specs_parse_and_reject_unknown_keys():
 
 
 # ---- the report on the committed small results ------------------------------------------------------
-@pytest.mark.slow                   # the quick loop has test_report_on_fresh_results (tests/analysis/test_studies.py)
+# slow: the quick loop has test_report_on_fresh_results (tests/analysis/test_studies.py)
+@pytest.mark.slow
 @pytest.mark.skipif(not (ROOT / "results_small" / "margins" / "summary.json").is_file(),
                     reason="committed small results absent")
 def test_report_on_the_committed_small_results(tmp_path):
