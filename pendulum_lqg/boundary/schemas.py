@@ -16,7 +16,6 @@ from typing import Any
 
 from pendulum_lqg.boundary import read_json
 from pendulum_lqg.boundary.fields import (
-    Invalid,
     Where,
     any_text,
     boolean,
@@ -42,7 +41,6 @@ MAX_FRAME_STACK = 10_000
 ESTIMATORS = ("kalman",)
 
 _RATE = number(low=0.0, high=1.0)
-_ROW_KEYS = ("episode", "success", "cost")
 _COST = number(nullable=True)
 
 
@@ -59,15 +57,6 @@ def _figures(where: Where, data: Any, *, gap: bool) -> dict[str, Any]:
     return out
 
 
-def _score_row(value: Any) -> dict[str, Any]:
-    """One episode row of a suite entry, as the failure-aware score reads it."""
-    row = table(value)
-    if set(_ROW_KEYS) - set(row):
-        raise Invalid("a table with " + ", ".join(_ROW_KEYS))
-    return {"episode": integer(0)(row["episode"]), "success": boolean(row["success"]),
-            "cost": number()(row["cost"])}
-
-
 def score_suite(where: Where, data: Any) -> dict[str, Any]:
     """One ``suites.NAME`` entry of a score file, as the board reads it."""
     data = where.check(data, table)
@@ -80,8 +69,6 @@ def score_suite(where: Where, data: Any) -> dict[str, Any]:
     out.update(_figures(where, data, gap=True))
     out["score_mean"] = where.get(data, "score_mean", _COST)
     out["score_ci"] = where.get(data, "score_ci", list_of(_COST, 2))
-    if "rows" in data:
-        out["rows"] = where.get(data, "rows", list_of(_score_row))
     for key in ("reference", "full_state_bound"):
         out[key] = _figures(where.at(key), where.get(data, key, table), gap=False)
     return out

@@ -121,8 +121,6 @@ def test_a_board_without_method_files_has_no_methods_table(tmp_path):
 
 @pytest.mark.parametrize(("change", "message"), [
     (lambda d: d.__setitem__("seed", -1), "seed: expected a non-negative integer"),
-    (lambda d: d["suites"]["lecture"]["rows"][1].pop("cost"),
-     "suites.lecture.rows: expected a list whose items are each a table with episode, success"),
     (lambda d: d["suites"]["lecture"].__setitem__("score_mean", "high"),
      "suites.lecture.score_mean: expected a finite number or null"),
 ])
