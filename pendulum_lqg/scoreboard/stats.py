@@ -85,30 +85,48 @@ def as_runs_by_suites(scores: Any) -> np.ndarray:
     return x
 
 
+def interquartile_means(rows: np.ndarray) -> np.ndarray:
+    """The interquartile mean of each row of a ``(k, n)`` array: the mean of its middle 50 %
+    (25 % trimmed from each end, as rliable's IQM and :func:`scipy.stats.trim_mean` with
+    ``proportiontocut=0.25``). Rows at once, for the bootstrap's resamples."""
+    flat = np.sort(np.asarray(rows, dtype=float), axis=1)
+    n = flat.shape[1]
+    if n == 0:
+        return np.full(flat.shape[0], math.nan)
+    cut = int(0.25 * n)
+    return flat[:, cut:n - cut].mean(axis=1)
+
+
 def interquartile_mean(scores: np.ndarray) -> float:
-    """The mean of the middle 50 % of all scores (25 % trimmed from each end, as rliable's IQM and
-    :func:`scipy.stats.trim_mean` with ``proportiontocut=0.25``)."""
-    flat = np.sort(np.asarray(scores, dtype=float).ravel())
-    if flat.size == 0:
-        return math.nan
-    cut = int(0.25 * flat.size)
-    return float(flat[cut:flat.size - cut].mean())
+    """The mean of the middle 50 % of all scores (:func:`interquartile_means` of one row)."""
+    return float(interquartile_means(np.asarray(scores, dtype=float).reshape(1, -1))[0])
 
 
-def stratified_bootstrap_ci(scores: np.ndarray, statistic: Callable[[np.ndarray], float],
+def stratified_bootstrap_ci(scores: np.ndarray, statistic: Callable[[np.ndarray], Any],
                             *, resamples: int = BOOTSTRAP_RESAMPLES, seed: int = BOOTSTRAP_SEED,
-                            level: float = 0.95) -> tuple[float, float]:
+                            level: float = 0.95, vectorized: bool = False) -> tuple[float, float]:
     """The percentile interval of ``statistic`` over stratified bootstrap resamples of the
     ``(runs, suites)`` array ``scores``: in each resample, every suite's column gets its own draw of
-    runs with replacement (the suites are the strata)."""
+    runs with replacement (the suites are the strata).
+
+    ``statistic`` maps one ``(runs, suites)`` resample to a number; with ``vectorized=True`` it is
+    called once, on all resamples stacked as ``(resamples, runs, suites)``, and returns one number
+    per resample (as :func:`scipy.stats.bootstrap`'s ``vectorized``) — the same draws either way.
+    """
     x = as_runs_by_suites(scores)
     runs, suites = x.shape
     if runs == 0:
         return math.nan, math.nan
     rng = np.random.default_rng(seed)
     idx = rng.integers(0, runs, size=(resamples, runs, suites))
-    cols = np.arange(suites)
-    stats = np.array([statistic(x[draw, cols]) for draw in idx])
+    samples = x[idx, np.arange(suites)]
+    if vectorized:
+        stats = np.asarray(statistic(samples), dtype=float)
+        if stats.shape != (resamples,):
+            raise ValueError(f"statistic: expected one value per resample, shape ({resamples},), "
+                             f"got {stats.shape}")
+    else:
+        stats = np.array([statistic(sample) for sample in samples])
     tail = 100 * (1 - level) / 2
     lo, hi = np.percentile(stats, [tail, 100 - tail])
     return float(lo), float(hi)
@@ -156,6 +174,14 @@ def aggregate(scores: np.ndarray) -> dict[str, Any]:
     the figures a board row shows for one method."""
     x = as_runs_by_suites(scores)
     return {"runs": x.shape[0],
-            "iqm": interquartile_mean(x), "iqm_ci": list(stratified_bootstrap_ci(x, interquartile_mean)),
+            "iqm": interquartile_mean(x),
+            "iqm_ci": list(stratified_bootstrap_ci(x, lambda s: interquartile_means(_rows(s)),
+                                                   vectorized=True)),
             "mean": float(np.mean(x)),
-            "mean_ci": list(stratified_bootstrap_ci(x, lambda s: float(np.mean(s))))}
+            "mean_ci": list(stratified_bootstrap_ci(x, lambda s: _rows(s).mean(axis=1),
+                                                    vectorized=True))}
+
+
+def _rows(samples: np.ndarray) -> np.ndarray:
+    """Stacked ``(k, runs, suites)`` resamples as ``(k, runs · suites)`` rows."""
+    return samples.reshape(samples.shape[0], -1)

@@ -106,3 +106,17 @@ def test_the_iqm_interval_of_one_suite_matches_scipy_bootstrap(runs):
     scale = x.std() / np.sqrt(runs)
     assert ours[0] == pytest.approx(res.confidence_interval.low, abs=0.25 * scale)
     assert ours[1] == pytest.approx(res.confidence_interval.high, abs=0.25 * scale)
+
+
+def test_a_vectorized_statistic_sees_the_same_resamples_as_the_per_resample_one():
+    # aggregate() bootstraps with vectorized statistics; called one resample at a time, the same
+    # rule over the same draws gives the same interval to the last bit
+    x = np.random.default_rng(5).gamma(2.0, size=(7, 3)) * [1.0, 0.0, 2.0]
+    one_by_one = (stats.stratified_bootstrap_ci(x, stats.interquartile_mean),
+                  stats.stratified_bootstrap_ci(x, lambda s: float(np.mean(s))))
+    agg = stats.aggregate(x)
+    assert (tuple(agg["iqm_ci"]), tuple(agg["mean_ci"])) == one_by_one
+    rows = np.array([[4.0, 1.0, 3.0, 2.0], [0.0, 0.0, 9.0, 1.0]])
+    assert stats.interquartile_means(rows).tolist() == [2.5, 0.5]     # middle two of each row
+    with pytest.raises(ValueError, match=r"statistic: expected one value per resample, shape \(2000,\)"):
+        stats.stratified_bootstrap_ci(x, lambda s: s.mean(), vectorized=True)
