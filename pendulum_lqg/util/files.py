@@ -53,6 +53,39 @@ def output_file(where: str, path: str | os.PathLike[str] | None, *, what: str = 
     return target
 
 
+def output_folder(where: str, path: str | os.PathLike[str] | None, *,
+                  what: str = "outputs") -> Path:
+    """``path`` checked as a folder to write into, before any work starts: absent (it is created,
+    with its parents) or a folder (a symbolic link followed). A regular file, a device, a FIFO, a
+    socket or a symbolic link that loops is one :class:`ConfigError` line naming ``where``, and is
+    left as it is; so is ``''`` and a folder that cannot be written."""
+    text = "" if path is None else os.fspath(path)
+    if not str(text).strip():
+        raise ConfigError(f"{where}: expected a folder for the {what}, got {text!r}")
+    folder = Path(text)
+    try:
+        mode = os.stat(folder).st_mode
+    except FileNotFoundError:
+        mode = None
+    except (OSError, RuntimeError) as exc:
+        looping = getattr(exc, "errno", None) == errno.ELOOP
+        raise ConfigError(f"{where}: {folder} " + ("is a symbolic link that loops" if looping else
+                          f"cannot be inspected ({getattr(exc, 'strerror', None) or exc})")
+                          + f"; expected a folder for the {what}") from None
+    if mode is not None and not stat.S_ISDIR(mode):
+        kind = "a regular file" if stat.S_ISREG(mode) else file_kind(mode)
+        raise ConfigError(f"{where}: {folder} is {kind}; expected a folder for the {what} (it "
+                          "is created if missing; the path is left as it is)")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot create the folder {folder}: "
+                          f"{exc.strerror or exc}") from None
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ConfigError(f"{where}: the folder {folder} is not writable")
+    return folder
+
+
 def regular_target(where: str, path: Path, *, what: str = "file") -> Path:
     """The file ``path`` names (a symbolic link followed), which must be absent or a regular
     file; anything else — a device, a FIFO, a socket, a folder, a symbolic link that loops — is
