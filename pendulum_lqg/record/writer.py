@@ -432,12 +432,7 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
     blueprint = _blueprint(prefixes, estimated=estimated, covariance=covariance, eye=eye(plant))
     rec = rr.RecordingStream(application_id)
     out_path = recording_path(path) if path is not None else None
-    if out_path is not None:
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-    # the file is written beside its name and renamed once flushed: a failed write keeps the old
-    # recording whole, and only a new path or a regular file is replaced
-    with (contextlib.nullcontext(None) if out_path is None
-          else replacing(out_path, where="record", what="recording")) as tmp:
+    with _file_target(out_path) as tmp:
         viewer, viewer_note = _open_sinks(rr, rec, tmp, spawn=spawn, blueprint=blueprint)
         rec.send_recording_name(f"{policy.name}: {len(trajectories)} episode(s)")
         w = _Writer(rr, rec)
@@ -448,14 +443,23 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
             _record_episode(w, plant, tr, pre, estimated=estimated, label=label,
                             u_max=plant.u_max)
         note = _flush(rec, viewer)
-    viewer_reached: bool | None = None if not spawn else viewer
-    if note is not None:
-        viewer_reached, viewer_note = False, note
+    viewer_reached: bool | None = None if not spawn else (viewer and note is None)
+    viewer_note = note if note is not None else viewer_note
     seconds = time.perf_counter() - t_start
     size = out_path.stat().st_size if out_path is not None and out_path.exists() else 0
     return RecordingStats(episodes=len(trajectories), entities=len(w.entities), rows=w.rows,
                           seconds=seconds, seconds_logging=w.seconds, path=out_path, bytes=size,
                           viewer_reached=viewer_reached, viewer_note=viewer_note)
+
+
+def _file_target(out_path: Path | None) -> contextlib.AbstractContextManager[Path | None]:
+    """The file the stream is written to: none, or a temporary file beside ``out_path`` renamed
+    over it once flushed (:func:`~pendulum_lqg.util.files.replacing`) — a failed write keeps the
+    old recording whole, and only a new path or a regular file is replaced. Its folder is made."""
+    if out_path is None:
+        return contextlib.nullcontext(None)
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    return replacing(out_path, where="record", what="recording")
 
 
 def _prefixes(trajectories: list[Trajectory], by_episode: dict[int, str],

@@ -60,10 +60,10 @@ def number(*, minimum: float | None = None, positive: bool = False,
     """argparse type: a finite number, ``> 0`` with ``positive``, within ``[minimum, maximum]``
     where given."""
     what = "a finite positive number" if positive else "a finite number"
-    if minimum is not None:
-        what += f" ≥ {minimum:g}"
-    if maximum is not None:
-        what += f" ≤ {maximum:g}"
+    if minimum is not None and maximum is not None:
+        what += f" from {minimum:g} to {maximum:g}"
+    elif minimum is not None or maximum is not None:
+        what += f" ≥ {minimum:g}" if minimum is not None else f" ≤ {maximum:g}"
 
     def parse(text: str) -> float:
         try:

@@ -22,7 +22,7 @@ def _leftovers(folder: Path) -> list[str]:
 def test_replacing_a_writer_that_fails_midway_keeps_the_old_file_whole(tmp_path):
     out = tmp_path / "picture.png"
     out.write_bytes(OLD)
-    with pytest.raises(OSError, match="No space left") as err:    # noqa: PT012
+    with pytest.raises(OSError, match="No space left") as err:
         with replacing(out, where="--plot", what="picture") as tmp:
             tmp.write_bytes(b"half a new picture")
             raise OSError(28, "No space left on device")
