@@ -42,15 +42,21 @@ def output_file(where: str, path: str | os.PathLike[str] | None, *, what: str = 
         raise ConfigError(f"{where}: expected a path for the {what}, got {text!r}")
     out = Path(text)
     target = regular_target(where, out, what=what)
-    parent = target.parent
-    try:
-        parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"{where}: cannot create the folder {parent}: "
-                          f"{exc.strerror or exc}") from None
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise ConfigError(f"{where}: the folder {parent} is not writable")
+    writable_folder(where, target.parent)
     return target
+
+
+def writable_folder(where: str, folder: Path) -> Path:
+    """``folder`` created (with its parents) if missing, and writable; else one
+    :class:`ConfigError` line naming ``where``."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot create the folder {folder}: "
+                          f"{exc.strerror or exc}") from None
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ConfigError(f"{where}: the folder {folder} is not writable")
+    return folder
 
 
 def output_folder(where: str, path: str | os.PathLike[str] | None, *,
@@ -76,14 +82,7 @@ def output_folder(where: str, path: str | os.PathLike[str] | None, *,
         kind = "a regular file" if stat.S_ISREG(mode) else file_kind(mode)
         raise ConfigError(f"{where}: {folder} is {kind}; expected a folder for the {what} (it "
                           "is created if missing; the path is left as it is)")
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"{where}: cannot create the folder {folder}: "
-                          f"{exc.strerror or exc}") from None
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise ConfigError(f"{where}: the folder {folder} is not writable")
-    return folder
+    return writable_folder(where, folder)
 
 
 def regular_target(where: str, path: Path, *, what: str = "file") -> Path:

@@ -135,3 +135,22 @@ def test_save_figure_writes_the_format_of_the_suffix(tmp_path, suffix, magic):
     out = save_figure(fig, tmp_path / f"f{suffix}", dpi=50)
     assert out == tmp_path / f"f{suffix}" and out.read_bytes().startswith(magic)
     assert _leftovers(tmp_path) == []
+
+
+@pytest.mark.parametrize(("kind", "says"), [("file", "is a regular file"),
+                                            ("fifo", "is a FIFO (named pipe)"),
+                                            ("loop", "is a symbolic link that loops")])
+def test_output_folder_refuses_what_is_not_a_folder(tmp_path, kind, says):
+    from pendulum_lqg.util.files import output_folder
+
+    target = tmp_path / "out"
+    if kind == "file":
+        target.write_text("kept")
+    elif kind == "fifo":
+        os.mkfifo(target)
+    else:
+        target.symlink_to("out")
+    with pytest.raises(ConfigError) as err:
+        output_folder("--out", target, what="scores")
+    assert str(err.value).startswith(f"--out: {target} {says}; expected a folder for the scores")
+    assert output_folder("--out", tmp_path / "new" / "deep", what="scores").is_dir()
