@@ -75,12 +75,27 @@ def lti_scenario(plant: LTIPlant, *, duration: float = 10.0, noise_scale: float 
 
 
 def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+luenberger"), *,
-               noise_scale: float = 1.0, duration: float = 10.0) -> dict[str, Any]:
+               noise_scale: float = 1.0, duration: float = 10.0, estimate0: str = "zero",
+               burn_in: float = 0.0) -> dict[str, Any]:
     """The stationary closed loop (:class:`~pendulum_lqg.policies.theory.ClosedLoopTheory`) of
-    each built-in policy on ``plant`` with its noise scaled by ``noise_scale`` (std)."""
-    from pendulum_lqg.policies.theory import StationaryProblem, linear_estimator, stationary
+    each built-in policy on ``plant`` with its noise scaled by ``noise_scale`` (std), and the
+    expected RMS over an episode of ``duration`` seconds from the file's ``x0``, ``x0_std`` and
+    ``estimate0`` (after ``burn_in`` seconds). The scenario's own checks refuse a negative or
+    too large ``noise_scale``, a non-positive ``duration`` and a ``burn_in`` not shorter than
+    it, one line each."""
+    from pendulum_lqg.policies.theory import (
+        StationaryProblem,
+        episode_start,
+        linear_estimator,
+        stationary,
+    )
 
-    s2 = float(noise_scale) ** 2
+    scenario = lti_scenario(plant, duration=duration, noise_scale=noise_scale,
+                            estimate0=estimate0, burn_in=burn_in)
+    s = scenario.noise.scale
+    s2 = s * s
+    x0 = np.zeros(plant.n_states) if plant.x0 is None else plant.x0
+    x0_std = np.zeros(plant.n_states) if plant.x0_std is None else plant.x0_std
     out = {}
     for name in names:
         policy = design_lti_policy(plant, name)
@@ -92,5 +107,7 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
         out[name] = stationary(prob, name=name, duration=duration,
                                limits={"force_limit": plant.force_limit},
                                state_names=plant.state_names,
-                               units=("",) * plant.n_states)
+                               units=("",) * plant.n_states,
+                               start=episode_start(x0, x0_std, scenario.estimate0, policy),
+                               burn_in=scenario.burn_in)
     return out
