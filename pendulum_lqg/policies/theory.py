@@ -1,4 +1,4 @@
-r"""Theory beside simulation: the stationary closed loop of a linear policy, in closed form.
+r"""Theory beside simulation: a linear policy's closed loop in closed form, stationary and per episode.
 
 For a linear plant sampled at the control period T, a linear estimator and ``u = −K x̂`` driven by
 the scenario's Gaussian noise, the plant state ``x`` and the estimator's state ``ξ`` form one
@@ -25,16 +25,16 @@ Definitions match the simulation's metrics (:mod:`pendulum_lqg.core.metrics`): `
 estimation error are taken at the sampling instants (the state the controller sees, after the
 period's noise jump), ``rms`` and the cost rate average over the physics steps of a period as the
 metrics' integrals do (``J = ∫ xᵀ diag(Q) x + R u² dt``, the rectangle rule at the physics step,
-:func:`pendulum_lqg.core.rules.period_integrals`). The time-varying Kalman filter is taken at its
-steady state (its gain converges within a fraction of a second; the stationary loop is that of the
-steady gain).
+:func:`pendulum_lqg.core.rules.period_integrals`). :func:`episode_theory` gives the expected RMS
+over one episode from x₀ and x̂₀ (mean and covariance through the loop, in closed form; the
+time-varying Kalman filter through its gains, the stationary loop at its steady gain).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -46,7 +46,6 @@ if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
     from pendulum_lqg.model.plant import Plant
     from pendulum_lqg.policies.lqg import DesignSpec
-
 
 
 @dataclass(frozen=True)
@@ -67,6 +66,9 @@ class LinearEstimator:
     full_state: bool = False
     note: str = ""
     S: np.ndarray | None = None
+    #: the estimators of the first periods when the gain varies (the time-varying Kalman
+    #: filter's, until its gain is the steady one); the periods after them use this one
+    schedule: tuple[LinearEstimator, ...] = ()
 
     def start_map(self, n: int) -> np.ndarray:
         """``S`` (q, n): ξ₀ = S x̂₀ (q = 0 without an estimator)."""
@@ -92,11 +94,13 @@ def linear_estimator(policy: Any) -> LinearEstimator:
         z = np.zeros((0, 0))
         return LinearEstimator(z, z, z, z, z, full_state=True)    # shapes: augmented_loop
     if isinstance(est, est_mod.CurrentEstimator | est_mod.TimeVaryingKalman):
-        L = policy.info["L"] if isinstance(est, est_mod.TimeVaryingKalman) else est.gain
-        note = ("time-varying Kalman filter taken at its steady-state gain"
-                if isinstance(est, est_mod.TimeVaryingKalman) else "")
-        H = np.eye(est.Phi.shape[0]) - L @ est.C
-        return LinearEstimator(est.Phi @ H, est.Phi @ L, est.Gamma, H, L, note=note)
+        tv = isinstance(est, est_mod.TimeVaryingKalman)
+        L = policy.info["L"] if tv else est.gain
+        steps = _gain_schedule(est, L) if tv else ()
+        note = ("time-varying Kalman filter: the stationary loop at its steady-state gain, the "
+                "episode through its gains" if tv else "")
+        return replace(_current_form(est.Phi, est.Gamma, est.C, L), note=note,
+                       schedule=tuple(_current_form(est.Phi, est.Gamma, est.C, g) for g in steps))
     if isinstance(est, est_mod.PredictorEstimator):
         q = est.F.shape[0]
         return LinearEstimator(est.F, est.G_y, est.G_u, np.eye(q), np.zeros((q, est.C.shape[0])))
@@ -110,6 +114,27 @@ def linear_estimator(policy: Any) -> LinearEstimator:
                       "knows (plugins and kalman-delay are not)")
 
 
+def _current_form(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, L: np.ndarray) -> Any:
+    """The current-form estimator of gain L: ``ξ = x̄``, ``x̂ = (I − LC)x̄ + L y``."""
+    H = np.eye(Phi.shape[0]) - L @ C
+    return LinearEstimator(Phi @ H, Phi @ L, Gamma, H, L)
+
+
+#: A varying gain is the steady one within this relative distance; at most MAX_SCHEDULE periods.
+GAIN_TOLERANCE, MAX_SCHEDULE = 1e-12, 100_000
+
+
+def _gain_schedule(est: Any, L: np.ndarray) -> list[np.ndarray]:
+    """The gains ``L_a`` of a time-varying Kalman filter until they are the steady ``L``."""
+    gains, scale = [], float(np.max(np.abs(L))) or 1.0
+    while len(gains) < MAX_SCHEDULE:
+        La = est.covariances(len(gains))[2]
+        if float(np.max(np.abs(La - L))) <= GAIN_TOLERANCE * scale:
+            break
+        gains.append(La)
+    return gains
+
+
 @dataclass(frozen=True)
 class AugmentedLoop:
     r"""The closed loop :math:`s^+ = \mathcal{A}s + \mathcal{B}e` with the read-outs
@@ -121,6 +146,8 @@ class AugmentedLoop:
     D_u: np.ndarray
     C_e: np.ndarray
     D_e: np.ndarray
+    Phi: np.ndarray          # the period's plant (Φ_T, Γ_T) it was formed from
+    Gamma: np.ndarray
 
 
 def augmented_loop(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, K: np.ndarray,
@@ -151,7 +178,7 @@ def augmented_loop(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, K: np.ndar
     D_u = np.hstack([np.zeros((K.shape[0], n)), -K @ D_v])
     C_e = np.hstack([D_x - np.eye(n), H])
     D_e = np.hstack([np.zeros((n, n)), D_v])
-    return AugmentedLoop(A=A, B=B, C_u=C_u, D_u=D_u, C_e=C_e, D_e=D_e)
+    return AugmentedLoop(A=A, B=B, C_u=C_u, D_u=D_u, C_e=C_e, D_e=D_e, Phi=Phi, Gamma=Gamma)
 
 
 def period_samples(kind: str, Phi: np.ndarray, Gamma: np.ndarray, k: int,
@@ -332,8 +359,7 @@ def start_moments(loop: AugmentedLoop, est: LinearEstimator, start: EpisodeStart
     return m0, P0
 
 
-def mean_second_moment(A: np.ndarray, Sigma: np.ndarray, G: np.ndarray, a: int, b: int,
-                       ) -> np.ndarray:
+def mean_second_moment(A: np.ndarray, Sigma: np.ndarray, G: np.ndarray, a: int, b: int) -> Any:
     r"""The mean over periods ``a … b−1`` of :math:`E[s_k s_k^T] = \Sigma + A^k G A^{kT}`.
 
     With :math:`X = A X A^T + G` (one Lyapunov equation, A stable) the finite sum is
@@ -375,24 +401,35 @@ def episode_theory(loop: AugmentedLoop, maps: list[np.ndarray], N: np.ndarray,
         return EpisodeTheory(rms=dict.fromkeys(state_names, inf), u_rms=inf,
                              estimate_error_rms=dict.fromkeys(state_names, inf), cost_J=inf,
                              periods=periods, skip=skip, burn_in=burn)
-    m0, P0 = start_moments(loop, prob.estimator, start)
-    G = P0 - Sigma + np.outer(m0, m0)
-    window = readouts(loop, maps, N, mean_second_moment(loop.A, Sigma, G, skip, periods))
-    whole = readouts(loop, maps, N, mean_second_moment(loop.A, Sigma, G, 0, periods))
-    cost = periods * period * float(np.trace(prob.Q @ whole.x_steps) + np.trace(prob.R @ whole.u))
-    values = [window.x_steps, window.u, window.error]
+    m, P = start_moments(loop, prob.estimator, start)
+    sums: dict[int, list[Any]] = {0: [0.0] * 3, skip: [0.0] * 3}   # x, u, e summed from 0, skip
+    sched = prob.estimator.schedule[:periods]       # the periods of a varying gain, one by one
+    for a, est in enumerate(sched):
+        la = augmented_loop(loop.Phi, loop.Gamma, prob.C, prob.K, est)
+        r = readouts(la, maps, N, P + np.outer(m, m))
+        for b in {0, skip} if a >= skip else {0}:
+            sums[b] = [s + v for s, v in zip(sums[b], (r.x_steps, r.u, r.error), strict=True)]
+        m, P = la.A @ m, la.A @ P @ la.A.T + la.B @ N @ la.B.T
+    rest, G = periods - len(sched), P - Sigma + np.outer(m, m)
+    for b in {0, skip} if rest > 0 else ():          # then the steady loop, in closed form
+        a = max(b - len(sched), 0)
+        r = readouts(loop, maps, N, mean_second_moment(loop.A, Sigma, G, a, rest))
+        sums[b] = [s + v * (rest - a) for s, v in zip(sums[b], (r.x_steps, r.u, r.error),
+                                                      strict=True)]
+    whole, window = ([v / (periods - b) for v in sums[b]] for b in (0, skip))
+    cost = periods * period * float(np.trace(prob.Q @ whole[0]) + np.trace(prob.R @ whole[1]))
+    values = window
     if not (all(np.all(np.isfinite(v)) for v in values) and math.isfinite(cost)):
         raise ConfigError("x0: the episode's second moments overflow; the theory needs a "
                           "smaller initial state or noise")
-    return EpisodeTheory(rms=_per_state(window.x_steps, state_names, True),
-                         u_rms=float(np.sqrt(max(window.u[0, 0], 0.0))),
-                         estimate_error_rms=_per_state(window.error, state_names, True),
+    return EpisodeTheory(rms=_per_state(window[0], state_names, True),
+                         u_rms=float(np.sqrt(max(window[1][0, 0], 0.0))),
+                         estimate_error_rms=_per_state(window[2], state_names, True),
                          cost_J=cost, periods=periods, skip=skip, burn_in=burn)
 
 
 def noise_covariance(prob: StationaryProblem) -> np.ndarray:
-    """``N = blkdiag(Wd, V)`` (n+p, n+p), the covariance of one period's ``e = [w; v]``; a
-    one-line refusal when the noise is not finite (a scale whose square overflows)."""
+    """``N = blkdiag(Wd, V)``, the covariance of a period's ``e = [w; v]``; finite or refused."""
     n, p = prob.Wd.shape[0], prob.V.shape[0]
     N = np.block([[prob.Wd, np.zeros((n, p))], [np.zeros((p, n)), prob.V]])
     if not np.all(np.isfinite(N)):

@@ -106,9 +106,19 @@ def test_lecture_answer_luenberger_stable_but_beyond_the_track(plant):
 
 
 def test_time_varying_kalman_is_its_steady_state(plant):
+    """Stationary: the filter at its steady gain. Over the episode: its own gains first (the
+    filter starts from M0 and trusts the first samples more), so its estimate error differs from
+    the steady filter's, and the schedule ends where the gain is the steady one."""
     res = lecture_theory(("dlqr+kalman", "dlqr+kalman-tv"), plant=plant)
     assert res["dlqr+kalman-tv"].std == res["dlqr+kalman"].std
     assert "steady-state" in res["dlqr+kalman-tv"].notes[0]
+    tv, steady = res["dlqr+kalman-tv"].episode, res["dlqr+kalman"].episode
+    assert tv.estimate_error_rms["theta"] != pytest.approx(steady.estimate_error_rms["theta"],
+                                                           rel=1e-3)
+    policy = build_policy("dlqr+kalman-tv", plant=plant, scenario=Scenario())
+    sched = linear_estimator(policy).schedule
+    assert 0 < len(sched) < 100_000
+    assert np.allclose(sched[-1].D_y, policy.info["L"], rtol=1e-9, atol=1e-12)
 
 
 def test_theory_refuses_what_it_does_not_model(plant):
@@ -239,10 +249,14 @@ def _propagated(prob, start, periods):
     m = np.concatenate([start.x0, S @ (start.x0 if start.x_hat0 is None else start.x_hat0)])
     J = np.vstack([np.eye(n), S if start.x_hat0 is None else 0 * S])
     P = J @ np.diag(start.x0_std ** 2) @ J.T
-    Zs = np.vstack([np.hstack([np.eye(n), np.zeros((n, loop.A.shape[0] - n))]), loop.C_u])
-    Ze = np.vstack([np.zeros((n, N.shape[0])), loop.D_u])
     x2, u2, e2 = np.zeros(n), 0.0, np.zeros(n)
-    for _ in range(periods):
+    steady = loop
+    for j in range(periods):                  # a varying gain: its own loop in each period
+        sched = prob.estimator.schedule
+        loop = augmented_loop(Phi_T, Gamma_T, prob.C, prob.K, sched[j]) if j < len(sched) \
+            else steady
+        Zs = np.vstack([np.hstack([np.eye(n), np.zeros((n, loop.A.shape[0] - n))]), loop.C_u])
+        Ze = np.vstack([np.zeros((n, N.shape[0])), loop.D_u])
         M = P + np.outer(m, m)
         z = Zs @ M @ Zs.T + Ze @ N @ Ze.T
         x2 += np.mean([np.diag(T @ z @ T.T) for T in maps], axis=0)
@@ -252,15 +266,19 @@ def _propagated(prob, start, periods):
     return np.sqrt(x2 / periods), math.sqrt(u2 / periods), np.sqrt(e2 / periods)
 
 
-@pytest.mark.parametrize("name, estimate0", [("dlqr+kalman", "zero"), ("dlqr+reduced-order", "zero"),
-                                             ("dlqr+luenberger", "true"),
-                                             ("lqr+kalman-bucy", "zero")])
-def test_episode_closed_form_equals_the_period_by_period_propagation(plant, name, estimate0):
+@pytest.mark.parametrize("name, estimate0, duration", [
+    ("dlqr+kalman", "zero", 3.0), ("dlqr+reduced-order", "zero", 3.0),
+    ("dlqr+luenberger", "true", 3.0), ("lqr+kalman-bucy", "zero", 3.0),
+    ("dlqr+kalman-tv", "zero", 3.0), ("dlqr+kalman-tv", "true", 15.0)])
+def test_episode_closed_form_equals_the_period_by_period_propagation(plant, name, estimate0,
+                                                                     duration):
     """The closed form (a Lyapunov equation and two matrix powers) against the mean and the
-    covariance stepped 300 periods one by one, from x₀ = [0.1, 0.1, 0, 0] with a spread,
-    on the cart-pole's ZOH plant (10 physics steps a period): the same numbers to 1e-9."""
+    covariance stepped period by period, from x₀ = [0.1, 0.1, 0, 0] with a spread, on the
+    cart-pole's ZOH plant (10 physics steps a period): the same numbers to 1e-9. The
+    time-varying Kalman filter's first periods go through its own gains in both (15 s: past the
+    end of its schedule, then the steady loop in closed form)."""
     scenario = Scenario(plant="linear-zoh", x0=(0.1, 0.1, 0.0, 0.0), x0_std=(0.05, 0.02, 0.1, 0.0),
-                        estimate0=estimate0, duration=3.0)
+                        estimate0=estimate0, duration=duration)
     policy = build_policy(name, plant=plant, scenario=scenario)
     res = policy_theory(plant, scenario, policy)
     from pendulum_lqg.core.physics.linear import LinearPhysics
@@ -273,7 +291,7 @@ def test_episode_closed_form_equals_the_period_by_period_propagation(plant, name
                              V=scenario.noise.V, Q=np.eye(4), R=np.eye(1))
     start = EpisodeStart(x0=np.array(scenario.x0), x0_std=np.array(scenario.x0_std),
                          x_hat0=None if estimate0 == "true" else np.zeros(4))
-    x, u, e = _propagated(prob, start, 300)
+    x, u, e = _propagated(prob, start, round(duration / 0.01))
     ep = res.episode
     assert [ep.rms[s] for s in STATES] == pytest.approx(x, rel=1e-9)
     assert ep.u_rms == pytest.approx(u, rel=1e-9)
