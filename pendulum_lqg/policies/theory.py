@@ -126,7 +126,8 @@ GAIN_TOLERANCE, MAX_SCHEDULE = 1e-12, 100_000
 
 def _gain_schedule(est: Any, L: np.ndarray) -> list[np.ndarray]:
     """The gains ``L_a`` of a time-varying Kalman filter until they are the steady ``L``."""
-    gains, scale = [], float(np.max(np.abs(L))) or 1.0
+    gains: list[np.ndarray] = []
+    scale = float(np.max(np.abs(L))) or 1.0
     while len(gains) < MAX_SCHEDULE:
         La = est.covariances(len(gains))[2]
         if float(np.max(np.abs(La - L))) <= GAIN_TOLERANCE * scale:
@@ -440,9 +441,8 @@ def noise_covariance(prob: StationaryProblem) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Readouts:
-    """Second moments read from a second moment ``E[s sᵀ]`` of ``[x; ξ]`` at the sampling
-    instants: ``z = [x; u]`` there (n+m, n+m), x averaged over the period's physics steps
-    (n, n), u (m, m) and the estimation error ``x̂ − x`` (n, n)."""
+    """From ``E[s sᵀ]`` at the sampling instants: ``z = [x; u]`` there (n+m, n+m), x over the
+    period's physics steps (n, n), u (m, m) and the estimation error ``x̂ − x`` (n, n)."""
 
     z: np.ndarray
     x_steps: np.ndarray
