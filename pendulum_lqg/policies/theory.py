@@ -97,8 +97,8 @@ def linear_estimator(policy: Any) -> LinearEstimator:
         tv = isinstance(est, est_mod.TimeVaryingKalman)
         L = policy.info["L"] if tv else est.gain
         steps = _gain_schedule(est, L) if tv else ()
-        note = ("time-varying Kalman filter: the stationary loop at its steady-state gain, the "
-                "episode through its gains" if tv else "")
+        note = ("time-varying Kalman filter: its steady-state gain when stationary, its own "
+                "gains over the episode" if tv else "")
         return replace(_current_form(est.Phi, est.Gamma, est.C, L), note=note,
                        schedule=tuple(_current_form(est.Phi, est.Gamma, est.C, g) for g in steps))
     if isinstance(est, est_mod.PredictorEstimator):
