@@ -179,7 +179,7 @@ def add_theory_parser(sub: Any) -> None:
                         "policies dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
                         "dlqr+none, dlqr+kalman, dlqr+luenberger)")
     p.add_argument("--noise-scale", type=_nonneg_number, default=1.0,
-                   help="multiplies both noises' standard deviations, at most 10⁶ (default 1)")
+                   help="multiplies both noises' standard deviations, at most 10¹² (default 1)")
     p.add_argument("--duration", type=_positive_number, default=defaults.DURATION,
                    help=f"episode length in s for the implied J and the episode's expected RMS "
                         f"(default {defaults.DURATION:g})")

@@ -80,12 +80,12 @@ def test_theory_json_carries_the_episode_from_x0(capsys):
 
 
 def test_theory_noise_scale_1e200_refuses_in_one_line(capsys):
-    """Issue 45: an OverflowError traceback before; now the documented ceiling (10⁶)."""
+    """Issue 45: an OverflowError traceback before; now the documented ceiling (10¹²)."""
     for argv in (["theory", "--noise-scale", "1e200"],
                  ["theory", "--lti", DI, "--noise-scale", "1e200"]):
         assert main(argv) == 2
         err = capsys.readouterr().err
-        assert "noise_scale: expected at most 1e+06 (the ceiling)" in err
+        assert "noise_scale: expected at most 1e+12 (the ceiling)" in err
         assert "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
@@ -98,7 +98,7 @@ def test_bench_grid_with_overflowing_noise_refuses_before_any_unit(tmp_path, cap
     out = tmp_path / "out"
     assert main(["bench", str(spec), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert "noise_scale: expected at most 1e+06" in err and "grid point noise_scale=1e+200" in err
+    assert "noise_scale: expected at most 1e+12" in err and "grid point noise_scale=1e+200" in err
     assert not out.exists()
 
 
