@@ -144,15 +144,8 @@ class Scenario:
         object.__setattr__(self, "randomize", Randomization.from_mapping(self.randomize))
 
     def _check_burn_in(self) -> None:
-        """``burn_in``: a finite number of seconds ≥ 0 that leaves at least one period."""
-        value = self.burn_in
-        if isinstance(value, bool) or not isinstance(value, int | float) \
-                or not np.isfinite(value) or value < 0:
-            raise ConfigError(f"burn_in: expected a finite number of seconds ≥ 0, got {value!r}")
-        object.__setattr__(self, "burn_in", float(value))
-        if self.burn_in_periods >= self.n_periods:
-            raise ConfigError(f"burn_in: expected less than the episode's duration "
-                              f"({self.duration:g} s), got {value!r} s")
+        object.__setattr__(self, "burn_in", check_burn_in(self.burn_in, self.control_period,
+                                                          self.duration))
 
     @property
     def burn_in_periods(self) -> int:
@@ -187,3 +180,15 @@ class Scenario:
             del d["burn_in"]            # before it existed keep their bytes
         return d
 
+
+def check_burn_in(burn_in: object, control_period: float, duration: float) -> float:
+    """``burn_in`` [s] as a float: finite, ≥ 0, and leaving at least one of the episode's
+    ``max(1, round(duration / T))`` control periods (it is rounded to ``round(burn_in / T)``
+    periods); otherwise a one-line :class:`ConfigError` naming ``burn_in``."""
+    if isinstance(burn_in, bool) or not isinstance(burn_in, int | float) \
+            or not np.isfinite(burn_in) or burn_in < 0:
+        raise ConfigError(f"burn_in: expected a finite number of seconds ≥ 0, got {burn_in!r}")
+    if round(burn_in / control_period) >= max(1, round(duration / control_period)):
+        raise ConfigError(f"burn_in: expected less than the episode's duration ({duration:g} s), "
+                          f"got {burn_in!r} s")
+    return float(burn_in)

@@ -80,19 +80,25 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
     """The stationary closed loop (:class:`~pendulum_lqg.policies.theory.ClosedLoopTheory`) of
     each built-in policy on ``plant`` with its noise scaled by ``noise_scale`` (std), and the
     expected RMS over an episode of ``duration`` seconds from the file's ``x0``, ``x0_std`` and
-    ``estimate0`` (after ``burn_in`` seconds). The scenario's own checks refuse a negative or
-    too large ``noise_scale``, a non-positive ``duration`` and a ``burn_in`` not shorter than
-    it, one line each."""
+    ``estimate0`` (after ``burn_in`` seconds). A negative or too large ``noise_scale``, a
+    ``duration`` that is not a positive number and a ``burn_in`` not shorter than it are refused
+    with the scenario's own checks, one line each (not the whole scenario: a file may be
+    sampled slower than the loop's ceiling of the control period)."""
+    from pendulum_lqg.core.noise import NoiseModel
+    from pendulum_lqg.core.scenario import check_burn_in
     from pendulum_lqg.policies.theory import (
         StationaryProblem,
         episode_start,
         linear_estimator,
         stationary,
     )
+    from pendulum_lqg.util.config import positive_number
 
-    scenario = lti_scenario(plant, duration=duration, noise_scale=noise_scale,
-                            estimate0=estimate0, burn_in=burn_in)
-    s = scenario.noise.scale
+    s = NoiseModel(scale=noise_scale).scale
+    duration = positive_number("duration", duration)
+    burn_in = check_burn_in(burn_in, plant.control_period, duration)
+    if estimate0 not in ("zero", "true"):
+        raise ConfigError(f"estimate0: expected 'zero' or 'true', got {estimate0!r}")
     s2 = s * s
     x0 = np.zeros(plant.n_states) if plant.x0 is None else plant.x0
     x0_std = np.zeros(plant.n_states) if plant.x0_std is None else plant.x0_std
@@ -108,6 +114,6 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
                                limits={"force_limit": plant.force_limit},
                                state_names=plant.state_names,
                                units=("",) * plant.n_states,
-                               start=episode_start(x0, x0_std, scenario.estimate0, policy),
-                               burn_in=scenario.burn_in)
+                               start=episode_start(x0, x0_std, estimate0, policy),
+                               burn_in=burn_in)
     return out

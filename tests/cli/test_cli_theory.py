@@ -180,3 +180,15 @@ def test_run_of_a_plugin_says_the_theory_does_not_apply(capsys):
                  "--duration", "0.2"]) == 0
     assert capsys.readouterr().out.splitlines()[-1].startswith("theory: not for this loop (a "
                                                                "plug-in policy")
+
+
+def test_theory_lti_takes_a_plant_sampled_slower_than_the_loops_ceiling(tmp_path, capsys):
+    """A file sampled every 2 s (a slow process) is past the simulated loop's 1 s ceiling of the
+    control period, but the theory has no such ceiling: its tables, stationary and episode."""
+    f = tmp_path / "slow.toml"
+    f.write_text('name = "slow"\ncontrol_period = 2.0\nA = [[-0.01]]\nB = [[1.0]]\n'
+                 'C = [[1.0]]\nW = [1.0]\nV = [0.1]\nx0 = [2.0]\n')
+    assert main(["theory", "--lti", str(f), "dlqr+kalman", "--duration", "100", "--json"]) == 0
+    entry = json.loads(capsys.readouterr().out)["policies"]["dlqr+kalman"]
+    assert entry["stable"] and entry["episode"]["periods"] == 50
+    assert entry["episode"]["rms"]["x1"] > entry["rms"]["x1"]      # the start at x₀ = 2
