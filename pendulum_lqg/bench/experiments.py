@@ -86,7 +86,7 @@ SENSING_KEYS = ("measurement_delay", "actuator_delay", "dropout", "actuator_tau"
 DELAY_KINDS = ("measurement", "actuator")
 SCENARIO_KEYS = ("control_period", "duration", "x0", "x0_std", "estimate0", "theta_max",
                  "track_limit", "force_limit", "settle_band", "cost_Q", "cost_R", *SENSING_KEYS,
-                 "randomize", "plant")
+                 "randomize", "plant", "burn_in")
 NOISE_KEYS = tuple(f.name for f in dataclasses.fields(NoiseModel))
 DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
 MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))

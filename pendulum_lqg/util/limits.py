@@ -124,6 +124,10 @@ MAX_STEPS_PER_PERIOD = 10_000
 #: Ceiling of the control periods per episode (duration / T): keeps an episode finite (10⁸ periods
 #: are ~10⁹ physics steps, hours per episode) and its metrics' counters exact.
 MAX_PERIODS = 10**8
+#: Ceiling of a noise scale (it multiplies the noise's standard deviations, its covariances by its
+#: square): far beyond any physical noise, and far below where the theory's covariances or a
+#: period's noise overflow a float (scale² past 10³⁰⁸ is inf).
+MAX_NOISE_SCALE = 1e12
 #: Ceiling of a measurement or actuator delay in control periods (a ring buffer of that many slots
 #: per episode).
 MAX_DELAY_PERIODS = 10_000
