@@ -7,6 +7,11 @@ is bounded here, and each bound is checked before any work starts, with a one-li
 
 from __future__ import annotations
 
+import itertools
+import operator
+from collections.abc import Iterable
+from typing import Any
+
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
@@ -50,6 +55,11 @@ MAX_INPUT_BYTES = 256 * 2**20
 #: Nesting of tables and lists in a file read at the boundary: the project's formats nest at most
 #: five deep; the parsers recurse once per level.
 MAX_NESTING = 64
+#: Episodes of one :func:`~pendulum_lqg.core.runner.run_episodes` call (the Python API): each is a
+#: row of every array of the batched core — a MuJoCo simulation, its noise block, its generator —
+#: and keeps its metric row. The front ends stay within it: ``run`` steps :data:`RUN_BATCH` at a
+#: time, ``score`` at most :data:`MAX_SCORE_EPISODES`, ``bench`` a work unit.
+MAX_BATCH_EPISODES = 100_000
 #: Episodes ``run`` steps together: bounded so memory does not grow with ``--episodes`` and long
 #: runs report progress between batches (results do not depend on the batching).
 RUN_BATCH = 1024
@@ -63,6 +73,43 @@ def check_at_most(where: str, value: int, ceiling: int, why: str, *,
     if value > ceiling:
         raise error(f"{where}: at most {ceiling:,} ({why}), got {value:,}")
     return value
+
+
+def check_episodes(episodes: Iterable[Any], *, trajectory: bool = False) -> list[int]:
+    """The episode numbers of one batch as a list of ints, counted before any is made.
+
+    At least one, at most :data:`MAX_BATCH_EPISODES` (:data:`MAX_RECORDED_EPISODES` with
+    ``trajectory``: every period of every episode is kept); a ``range`` or an array is counted by
+    its length, any other iterable read at most one past the ceiling, so ``range(10**9)`` is
+    refused at once. Otherwise one :class:`ConfigError` line naming ``episodes``."""
+    ceiling, why = ((MAX_RECORDED_EPISODES, "trajectory=True keeps every period of every episode")
+                    if trajectory else
+                    (MAX_BATCH_EPISODES, "each is a row of every array of the batched core and "
+                     "keeps its metric row; run larger studies in batches, or through bench"))
+    try:
+        count = len(episodes)                        # type: ignore[arg-type]
+    except TypeError:                                # a generator: read one past the ceiling
+        episodes = list(itertools.islice(episodes, ceiling + 1))
+        count = len(episodes)
+        if count > ceiling:
+            raise ConfigError(f"episodes: at most {ceiling:,} ({why}), got more") from None
+    check_at_most("episodes", count, ceiling, why)
+    if count == 0:
+        raise ConfigError("episodes: expected at least one episode number, got an empty "
+                          "collection")
+    try:
+        return [operator.index(e) for e in episodes]
+    except TypeError:
+        bad = next(e for e in episodes if not _is_index(e))
+        raise ConfigError(f"episodes: expected integer episode numbers, got {bad!r}") from None
+
+
+def _is_index(value: Any) -> bool:
+    try:
+        operator.index(value)
+    except TypeError:
+        return False
+    return True
 
 
 #: Ceiling of the control period T [s]. The cart-pole's unstable pole (≈ 4 rad/s) grows by e⁴ over
