@@ -1,10 +1,10 @@
 """The ``pendulum-lqg`` command: ``design``, ``run``, ``bench``, ``perf``, ``report``, ``score``,
 ``board``, ``theory``, ``train``.
 
-Modules: ``parser`` (the grammar and the arguments' conversions), ``design``, ``commands`` and
-``score`` (one function per subcommand). Only argument parsing and presentation live here; every
-computation is a library call. Heavy imports (numpy, MuJoCo, python-control, rich) happen inside
-the commands so ``--help`` is instant. Bad input prints one line ``error: …`` naming the parameter
+Modules: ``parser`` (the grammar and the arguments' conversions), ``design``, ``commands``,
+``score``, ``theory``, ``lti`` and ``train`` (one function per subcommand). Only argument parsing
+and presentation live here; every computation is a library call. Heavy imports (numpy, MuJoCo,
+python-control, rich) happen inside the commands so ``--help`` is instant. Bad input prints one line ``error: …`` naming the parameter
 and exits with status 2.
 """
 

@@ -208,7 +208,12 @@ def read_budgets(folder: Path) -> dict[str, list[tuple[int, float, int]]]:
     for path in sorted(folder.glob("*-seed*.json")):
         if not RUN_FILE.match(path.name) or not path.is_file():
             continue
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise ConfigError(f"{path}: expected a training record (JSON), got {exc}") from None
+        if not isinstance(doc, dict):
+            continue
         if "budget" in doc:                                     # an SB3 model's training record
             budget = doc["budget"]
             run = (int(budget["steps"]), float(budget["wall_seconds"]), int(budget["threads"]))

@@ -14,7 +14,7 @@ import pytest
 
 pytest.importorskip("stable_baselines3", reason="the rl extra (stable-baselines3, torch) is absent")
 
-from pendulum_lqg.cli import main  # noqa: E402
+from pendulum_lqg.cli import main
 
 
 def _curve(path):

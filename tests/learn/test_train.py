@@ -43,7 +43,8 @@ def test_train_list_names_every_method(capsys):
 
 def test_the_sb3_methods_declare_designs_the_scorer_can_rebuild():
     from pendulum_lqg.boundary.schemas import ALGORITHMS
-    from pendulum_lqg.learn.deep import METHODS as SB3, method_name, training_suite
+    from pendulum_lqg.learn.deep import METHODS as SB3
+    from pendulum_lqg.learn.deep import method_name, training_suite
     from pendulum_lqg.learn.runs import EVAL_SEED, eval_suite, run_name
     from pendulum_lqg.scoreboard.obs_design import ObservationDesign
     from pendulum_lqg.scoreboard.suites import load_suite
