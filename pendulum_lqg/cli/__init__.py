@@ -4,8 +4,8 @@
 Modules: ``parser`` (the grammar and the arguments' conversions), ``design``, ``commands``,
 ``score``, ``theory``, ``lti`` and ``train`` (one function per subcommand). Only argument parsing
 and presentation live here; every computation is a library call. Heavy imports (numpy, MuJoCo,
-python-control, rich) happen inside the commands so ``--help`` is instant. Bad input prints one line ``error: …`` naming the parameter
-and exits with status 2.
+python-control, rich) happen inside the commands so ``--help`` is instant. Bad input prints one
+line ``error: …`` naming the parameter and exits with status 2.
 """
 
 from __future__ import annotations
