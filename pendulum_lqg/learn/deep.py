@@ -124,9 +124,10 @@ def _design_env(m: Method, suite: Any) -> Any:
     return venv
 
 
-def build(m: Method, seed: int, suite: Any) -> tuple[Any, Any]:
-    """The model and its training env of run ``seed`` of ``m``, the env seeded for its first
-    reset (SB3 seeds the env with the model's seed when it builds the model: seeded again after
+def build(m: Method, seed: int, suite: Any, *, tensorboard: Path | None = None,
+          ) -> tuple[Any, Any]:
+    """The model and its training env of run ``seed`` of ``m`` (SB3's TensorBoard logs in
+    ``tensorboard`` where tensorboard is installed), the env seeded for its first reset (SB3 seeds the env with the model's seed when it builds the model: seeded again after
     that, sub-env i starts from TRAIN_SEED_BASE + 1000·seed + i)."""
     import importlib
 
@@ -136,16 +137,18 @@ def build(m: Method, seed: int, suite: Any) -> tuple[Any, Any]:
     cls = getattr(importlib.import_module(ALGORITHMS[m.algo]), m.algo)
     policy = "MlpLstmPolicy" if m.algo == "RecurrentPPO" else "MlpPolicy"
     model = cls(policy, venv, seed=seed, verbose=0, device="cpu",
-                tensorboard_log=_tensorboard_folder(), **m.kwargs)
+                tensorboard_log=_tensorboard_folder(tensorboard), **m.kwargs)
     venv.seed(TRAIN_SEED_BASE + 1000 * seed)
     return model, venv
 
 
-def _tensorboard_folder() -> str | None:
+def _tensorboard_folder(folder: Path | None) -> str | None:
     """TensorBoard logs (SB3's own) only where tensorboard is installed."""
     import importlib.util
 
-    return "tensorboard" if importlib.util.find_spec("tensorboard") is not None else None
+    if folder is None or importlib.util.find_spec("tensorboard") is None:
+        return None
+    return str(folder)
 
 
 def obs_norm_of(norm: Any) -> dict[str, Any]:
@@ -243,7 +246,7 @@ def _start(ctx: RunContext, m: Method) -> tuple[Any, Any, list[dict[str, Any]] |
     from pendulum_lqg.learn.curve import read_curve
 
     if not ctx.resume:
-        model, venv = build(m, ctx.seed, ctx.suite)
+        model, venv = build(m, ctx.seed, ctx.suite, tensorboard=ctx.out / "tensorboard")
         return model, venv, None
     saved = json.loads(ctx.path(CHECKPOINT).read_text(encoding="utf-8"))
     if saved["suite"] != ctx.suite.fingerprint() or saved["algo"] != m.algo:
@@ -251,7 +254,8 @@ def _start(ctx: RunContext, m: Method) -> tuple[Any, Any, list[dict[str, Any]] |
                           "algorithm; resume with the same method and --suite")
     venv = VecNormalize.load(str(ctx.path("-checkpoint-vecnormalize.pkl")), _design_env(m, ctx.suite))
     cls = getattr(importlib.import_module(ALGORITHMS[m.algo]), m.algo)
-    model = cls.load(str(ctx.path("-checkpoint.zip")), env=venv, device="cpu")
+    model = cls.load(str(ctx.path("-checkpoint.zip")), env=venv, device="cpu",
+                     tensorboard_log=_tensorboard_folder(ctx.out / "tensorboard"))
     if ctx.path("-checkpoint-replay.pkl").is_file():
         model.load_replay_buffer(str(ctx.path("-checkpoint-replay.pkl")))
     # loaded with an env, the model resets it on its next learn(): these seeds
