@@ -127,8 +127,9 @@ def _design_env(m: Method, suite: Any) -> Any:
 def build(m: Method, seed: int, suite: Any, *, tensorboard: Path | None = None,
           ) -> tuple[Any, Any]:
     """The model and its training env of run ``seed`` of ``m`` (SB3's TensorBoard logs in
-    ``tensorboard`` where tensorboard is installed), the env seeded for its first reset (SB3 seeds the env with the model's seed when it builds the model: seeded again after
-    that, sub-env i starts from TRAIN_SEED_BASE + 1000·seed + i)."""
+    ``tensorboard`` where tensorboard is installed), the env seeded for its first reset (SB3 seeds
+    the env with the model's seed when it builds the model: seeded again after that, sub-env i
+    starts from TRAIN_SEED_BASE + 1000·seed + i)."""
     import importlib
 
     from pendulum_lqg.boundary.schemas import ALGORITHMS
