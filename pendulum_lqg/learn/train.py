@@ -127,8 +127,13 @@ def prepare(method: str, *, seed: Any, suite: str | None = None, steps: Any = No
 
 
 def run(ctx: RunContext) -> list[Path]:
-    """Train the prepared run (:func:`prepare`)."""
+    """Train the prepared run (:func:`prepare`). A run started again (``--force``) first drops
+    the checkpoints of the run it replaces, so that a later ``--resume`` can only continue it."""
     ctx.out.mkdir(parents=True, exist_ok=True)
+    if not ctx.resume:
+        for old in ctx.out.glob(f"{ctx.name}-checkpoint*"):
+            if old.is_file():
+                old.unlink()
     kind = ctx.options["kind"]
     if kind == "sb3":
         from pendulum_lqg.learn.deep import METHODS as SB3
