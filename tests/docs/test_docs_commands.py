@@ -131,18 +131,17 @@ REDUCED: dict[str, tuple[str, str]] = {
     "uv run python benchmarks/instructions.py env":
         ("python benchmarks/instructions.py env --steps 20",
          "1000 steps under valgrind's callgrind: 20 (the count is not checked, the script is)"),
-    "uv run python benchmarks/instructions.py env --public":
-        ("python benchmarks/instructions.py env --public --steps 20",
-         "1000 steps under valgrind's callgrind: 20"),
-    "uv run python benchmarks/instructions.py vector":
-        ("python benchmarks/instructions.py vector --steps 2",
-         "100 vector steps under valgrind's callgrind: 2"),
-    "uv run python benchmarks/instructions.py loop":
-        ("python benchmarks/instructions.py loop --episodes 2",
-         "64 episodes under valgrind's callgrind: 2"),
     "uv run python experiments/record_demo.py --out /tmp/recordings":
         ("python experiments/record_demo.py --out recordings",
          "writes into the scratch folder, not a shared /tmp"),
+    "pendulum-lqg score --agent linear:experiments/agents/models/ars-history-seed0.json --suite all --out docs/leaderboard/scores/rl_ars-history-seed0.json":  # noqa: E501 (as the page shows it)
+        ("pendulum-lqg score --agent linear:experiments/agents/models/ars-history-seed0.json "
+         "--suite all --episodes 2 --out docs/leaderboard/scores/rl_ars-history-seed0.json",
+         "7 suites × 100 episodes: 2 each"),
+    "uv run python benchmarks/rl_figures.py profile docs/leaderboard/scores":
+        ("python benchmarks/rl_figures.py profile reduced/scores",
+         "bootstrap intervals over every score file: over the reference's and two runs each of "
+         "two methods (reduced/scores, a copy of those files)"),
     "python benchmarks/train_linear.py ars-history --seed 0":
         ("python benchmarks/train_linear.py ars-history --seed 0 --steps 400 --eval-every 200",
          "a training run of 1 000 000 env steps: 400"),
@@ -189,6 +188,9 @@ NOT_RUN: dict[str, str] = {
         "builds the whole site (CI's docs job); the tutorials it executes run in test_notebooks.py",
     "cd pendulum_lqg": "the reader's checkout",
     "cd any/folder": "the reader's own folder (the commands after it run in the page's scratch folder)",
+    "uv run --with jupyterlab --with jupytext jupyter lab docs/tutorials/":
+        "starts a Jupyter server; test_notebooks.py checks that it loads jupytext, that jupytext "
+        "reads each tutorial as a notebook, and runs every tutorial",
     "uv run rerun --web-viewer luenberger.rrd": "starts the Rerun web viewer (a server)",
     "uv run rerun luenberger.rrd": "opens the Rerun viewer (a window)",
     "uv run --extra ray pendulum-lqg bench lecture --executor ray":
@@ -196,6 +198,15 @@ NOT_RUN: dict[str, str] = {
     "ray start --head --port 6379": "starts a Ray cluster's head (a server)",
     "ray start --address HEAD_HOST:6379": "joins a Ray cluster on another machine",
     "pendulum-lqg bench mismatch --executor ray --address auto": "needs a running Ray cluster",
+    "python benchmarks/train_linear.py sysid-lqg --seed 0":
+        "identifies from 1 000 000 logged steps and has no budget option (minutes); "
+        "tests/design/test_sysid.py tests the identification and the LQG design it feeds",
+    **dict.fromkeys(["uv run python benchmarks/instructions.py env --public",
+                     "uv run python benchmarks/instructions.py vector",
+                     "uv run python benchmarks/instructions.py loop"],
+                    "an instruction count under valgrind, whose start-up alone costs tens of "
+                    "seconds: `instructions.py env --steps 20` runs the script's valgrind path; "
+                    "these change only the workload it counts"),
     "uv run python benchmarks/leaderboard.py":
         "rescores the committed leaderboard (18 entries × 7 suites × 100 episodes) and has no "
         "budget option; it calls score_entry, which the score commands of the same page run",
@@ -231,13 +242,18 @@ NOT_RUN: dict[str, str] = {
     'uv run pytest -q | tail -1; uv run pytest -q -m "not slow" | tail -1': "the test suite itself, timed",
 }
 #: grid axes, episodes and duration of a reduced experiment (:func:`reduced_experiment`); a study's
-#: own table is cut here, by name
+#: own table, or a grid that must keep a value, is cut here, by experiment and table
+#: the score files of ``reduced/scores``: the reference and two runs of two methods
+REDUCED_SCORES = ("dlqr+kalman.json", "rl_ppo-history-seed0.json", "rl_ppo-history-seed1.json",
+                  "rl_ars-history-seed0.json", "rl_ars-history-seed1.json")
 REDUCED_GRID_VALUES = 2
 REDUCED_EPISODES = 2
 REDUCED_DURATION_S = 1.0
-REDUCED_STUDY = {"margins": {"q": [1.0, 10.0], "n_omega": 200, "nyquist_points": 20},
-                 "roa": {"map_theta": [-1.2, 1.2, 3], "map_theta_dot": [-3.0, 3.0, 3],
-                         "tolerance": 0.3}}
+REDUCED_TABLES = {"margins": {"margins": {"q": [1.0, 10.0], "n_omega": 200, "nyquist_points": 20}},
+                  "roa": {"roa": {"map_theta": [-1.2, 1.2, 3], "map_theta_dot": [-3.0, 3.0, 3],
+                                  "tolerance": 0.3}},
+                  # the report draws each scale against the other at 1: the nominal plant stays
+                  "mismatch": {"grid": {"pole_mass_scale": [1.0, 2.0], "pole_length_scale": [1.0, 2.0]}}}
 
 
 @dataclass(frozen=True)
@@ -467,7 +483,7 @@ def test_every_option_of_every_subcommand_is_documented():
 def reduced_experiment(name: str) -> dict:
     """``experiments/NAME.toml`` cut to a test's budget: :data:`REDUCED_EPISODES` episodes of
     :data:`REDUCED_DURATION_S` s, the first :data:`REDUCED_GRID_VALUES` values of each grid axis,
-    and the study's table cut as :data:`REDUCED_STUDY` says; the name (and so the results folder)
+    and a table's values replaced as :data:`REDUCED_TABLES` says; the name (and so the results folder)
     unchanged, a relative plant file made absolute."""
     doc = tomllib.loads((ROOT / "experiments" / f"{name}.toml").read_text(encoding="utf-8"))
     doc["episodes"] = REDUCED_EPISODES
@@ -476,8 +492,8 @@ def reduced_experiment(name: str) -> dict:
     if "study" not in doc:
         doc.setdefault("scenario", {})["duration"] = REDUCED_DURATION_S
     doc["grid"] = {k: v[:REDUCED_GRID_VALUES] for k, v in doc.get("grid", {}).items()}
-    if name in REDUCED_STUDY:
-        doc[name].update(REDUCED_STUDY[name])
+    for table, values in REDUCED_TABLES.get(name, {}).items():
+        doc[table].update(values)
     return doc
 
 
@@ -510,6 +526,9 @@ def snapshot(tmp_path_factory) -> Path:
     for name in names:
         (snap / "reduced" / f"{name}.toml").write_text(_toml(reduced_experiment(name)),
                                                        encoding="utf-8")
+    (snap / "reduced" / "scores").mkdir()
+    for name in REDUCED_SCORES:
+        shutil.copy(ROOT / "docs" / "leaderboard" / "scores" / name, snap / "reduced" / "scores")
     return snap
 
 
@@ -543,13 +562,22 @@ def _run_in_process(argv: list[str], cwd: Path) -> subprocess.CompletedProcess:
             status = main(list(argv))
         except SystemExit as exc:             # --help and --version exit through argparse
             status = exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
+        except Exception:                     # a traceback: this command's test fails, not all
+            import traceback
+
+            err.write(traceback.format_exc())
+            status = 1
     return subprocess.CompletedProcess(["pendulum-lqg", *argv], status, out.getvalue(),
                                        err.getvalue())
 
 
 def _run(argv, cwd: Path) -> subprocess.CompletedProcess:
     env = {**os.environ, "COLUMNS": "120", "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
-    return subprocess.run(argv, cwd=cwd, capture_output=True, text=True, timeout=TIMEOUT_S, env=env)
+    try:
+        return subprocess.run(argv, cwd=cwd, capture_output=True, text=True, timeout=TIMEOUT_S,
+                              env=env)
+    except subprocess.TimeoutExpired as exc:    # this command's test fails, not all
+        return subprocess.CompletedProcess(argv, -9, str(exc.stdout), f"timed out: {exc}")
 
 
 def run_command(text: str, cwd: Path) -> subprocess.CompletedProcess:
@@ -600,10 +628,13 @@ def command_runs(request, snapshot, tmp_path_factory, git_status_before) -> dict
         on_page = [c for c in COMMANDS if c.page == page]
         last = max(on_page.index(c) for c in selected if c.page == page)
         work = _page_folder(page, snapshot, root)
+        done: dict[str, tuple] = {}          # a command the page shows twice runs once
         for cmd in on_page[:last + 1]:
-            if cmd.run_as is not None:
+            if cmd.run_as is not None and cmd.run_as not in done:
                 start = time.time()
-                runs[cmd.where] = (run_command(cmd.run_as, work), start, work)
+                done[cmd.run_as] = (run_command(cmd.run_as, work), start, work)
+            if cmd.run_as is not None:
+                runs[cmd.where] = done[cmd.run_as]
     return runs
 
 
