@@ -149,7 +149,6 @@ REDUCED: dict[str, tuple[str, str]] = {
 #: commands that need the ``rl`` extra (torch, stable-baselines3): documented command → the
 #: reduced form run where torch is installed (skipped, with this reason, where it is not)
 NEEDS_RL: dict[str, str] = {
-    "python benchmarks/leaderboard.py --rl": "python benchmarks/leaderboard.py --rl",
     "python benchmarks/train_agents.py ppo-history --seed 3":
         "python benchmarks/train_agents.py ppo-history --seed 3 --steps 256 --eval-every 128",
     "python benchmarks/train_agents.py ppo-history --seed 0 --noise-scale 0.25":
@@ -210,6 +209,9 @@ NOT_RUN: dict[str, str] = {
     "uv run python benchmarks/leaderboard.py":
         "rescores the committed leaderboard (18 entries × 7 suites × 100 episodes) and has no "
         "budget option; it calls score_entry, which the score commands of the same page run",
+    "python benchmarks/leaderboard.py --rl":
+        "rescores every committed RL model (the rl extra; 7 suites × 100 episodes each) and has "
+        "no budget option; score --agent sb3:… runs the same scoring (NEEDS_RL)",
     "uv run python benchmarks/instructions.py env --tree ../v034": _PERF_OLD,
     **dict.fromkeys([
         "git worktree add ../v041 34aa814 && git worktree add ../v034 00f1037",
