@@ -16,7 +16,8 @@ What is collected, from the fenced blocks of README.md and every page under docs
   - or not run, for the reason :data:`NOT_RUN` gives (an install, a server, the whole site).
 
   A documented command that is none of these fails :func:`test_every_documented_command_is_run_or_listed`,
-  and so does an entry of the tables that no page shows any more.
+  and so does a training run (``pendulum-lqg train …``, ``python benchmarks/train_*.py …``) that
+  no table gives a budget, and an entry of the tables that no page shows any more.
 * the commands run in a scratch folder per page, in the page's order (a ``report`` finds what the
   ``bench`` above it wrote), beside copies of the checkout's ``experiments/``, ``models/``,
   ``benchmarks/`` and ``docs/leaderboard/`` (a script that writes next to itself writes into the
@@ -68,6 +69,9 @@ UV_RUN = re.compile(r"^uv run(?:\s+--(?:extra|group|with)\s+\S+)*\s+")
 SHELL_OPERATORS = {">", ">>", "|", "&&", ";", "2>", "2>&1", "&"}
 TIMEOUT_S = 300
 HAS_TORCH = importlib.util.find_spec("torch") is not None
+#: a training run: never run as written (its budget is minutes to hours), only through a table
+TRAINING = re.compile(r"^(?:pendulum-lqg train\b(?!.*--(?:list|help))|python benchmarks/train_\w+\.py\b"
+                      r"(?!.*--(?:list|help)))")
 
 # ---- what is not run as written ----------------------------------------------------------------------
 _BENCH = "bench of 200 episodes per configuration: 2 episodes of 1 s on each grid axis's first two values"
@@ -318,7 +322,9 @@ class Command:
             return None
         if self.text in NEEDS_RL:
             return NEEDS_RL[self.text] if HAS_TORCH else None
-        return REDUCED[self.text][0] if self.text in REDUCED else self.text
+        if self.text in REDUCED:
+            return REDUCED[self.text][0]
+        return None if TRAINING.match(UV_RUN.sub("", self.text)) else self.text
 
     @property
     def kind(self) -> str:
@@ -400,6 +406,8 @@ def _quick(cmd: Command) -> bool:
 def _skip_reason(cmd: Command) -> str | None:
     if cmd.text in NOT_RUN:
         return f"not run: {NOT_RUN[cmd.text]}"
+    if cmd.run_as is None and cmd.text not in NEEDS_RL:
+        return "a training run without a reduced form: see test_every_documented_command_is_run_or_listed"
     if cmd.text in NEEDS_RL and not HAS_TORCH:
         return "needs the rl extra (torch is not installed)"
     return None
@@ -427,6 +435,10 @@ def test_every_documented_command_is_run_or_listed():
                if c.text not in NOT_RUN and _kind(c.run_as or c.text)[0] == "?"]
     assert not unknown, ("documented commands that are neither run nor listed in NOT_RUN "
                          f"(add a rule, a REDUCED form or a NOT_RUN reason): {unknown}")
+    training = [f"{c.where}: {c.text}" for c in COMMANDS if TRAINING.match(UV_RUN.sub("", c.text))
+                and c.text not in REDUCED and c.text not in NEEDS_RL and c.text not in NOT_RUN]
+    assert not training, ("training commands run as written (give each a tiny budget in REDUCED, "
+                          f"or in NEEDS_RL when it needs torch): {training}")
     shown = {c.text for c in COMMANDS}
     stale = sorted((set(REDUCED) | set(NEEDS_RL) | set(NOT_RUN)) - shown)
     assert not stale, f"table entries that no page shows any more: {stale}"
