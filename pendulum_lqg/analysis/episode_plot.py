@@ -127,12 +127,15 @@ def _inline_figure_class() -> type[Figure]:
 
 
 def save_episode_plot(fig: Figure, path: str | Path) -> Path:
-    """Write ``fig`` to ``path`` (``.png``, ``.svg`` or ``.pdf``, by the suffix); returns the path.
-    A suffix of another kind, or a path that exists and is not a regular file, is a
+    """Write ``fig`` to ``path`` (``.png``, ``.svg`` or ``.pdf``, by the suffix) under the output
+    rule (:func:`~pendulum_lqg.util.files.save_figure`: temporary file and rename); returns the
+    path. A suffix of another kind, or a path that exists and is not a regular file, is a
     :class:`ConfigError` naming ``--plot``."""
-    path = check_plot_path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    from pendulum_lqg.util.files import save_figure
+
+    # replaced whole or not at all: a failed write (a full disk, a file-size limit) keeps the old
+    # picture
+    return save_figure(fig, check_plot_path(path), where="--plot", what="picture", dpi=110)
 
 
 def check_plot_path(path: str | Path) -> Path:
