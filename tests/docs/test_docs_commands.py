@@ -210,10 +210,10 @@ NOT_RUN: dict[str, str] = {
                     "an instruction count under valgrind, whose start-up alone costs tens of "
                     "seconds: `instructions.py env --steps 20` runs the script's valgrind path; "
                     "these change only the workload it counts"),
-    "uv run python benchmarks/leaderboard.py":
+    "uv run python benchmarks/leaderboard.py --out docs/leaderboard --force":
         "rescores the committed leaderboard (18 entries × 7 suites × 100 episodes) and has no "
         "budget option; it calls score_entry, which the score commands of the same page run",
-    "python benchmarks/leaderboard.py --rl":
+    "python benchmarks/leaderboard.py --rl --out docs/leaderboard --force":
         "rescores every committed RL model (the rl extra; 7 suites × 100 episodes each) and has "
         "no budget option; score --agent sb3:… runs the same scoring (NEEDS_RL)",
     "uv run python benchmarks/instructions.py env --tree ../v034": _PERF_OLD,
