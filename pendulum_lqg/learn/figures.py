@@ -48,7 +48,9 @@ from typing import Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.learn.runs import RUNS_FOLDER, output_path, save_figure, script_main, write_text
+from pendulum_lqg.learn.runs import RUNS_FOLDER, output_path, write_text
+from pendulum_lqg.util.files import save_figure
+from pendulum_lqg.util.scripts import script_status
 
 OUT = RUNS_FOLDER / "figures"
 #: Thresholds τ of the performance profile (failure-aware score; 1 = the reference).
@@ -112,7 +114,7 @@ def draw_profile(scores: dict[str, np.ndarray], suites: list[str], path: Path) -
            ylabel="share of run × suite scores > τ", ylim=(-0.02, 1.02),
            title="Performance profile over " + ", ".join(suites))
     ax.legend(fontsize=8, loc="lower left")
-    save_figure(fig, path)
+    save_figure(fig, path, where="--out", what="figure", dpi=120)
 
 
 def improvement_table(scores: dict[str, np.ndarray], suites: list[str]) -> str:
@@ -193,7 +195,7 @@ def draw_curves(curves: dict[str, list[dict[str, np.ndarray]]], path: Path) -> N
     axes[0, 0].legend(fontsize=8)
     fig.suptitle("Learning curves: median and interquartile range across seeds "
                  "(20 fixed non-suite episodes per point)")
-    save_figure(fig, path)
+    save_figure(fig, path, where="--out", what="figure", dpi=120)
 
 
 # ---- training budgets ----------------------------------------------------------------------------
@@ -242,7 +244,7 @@ def budget_table(budgets: dict[str, list[tuple[int, float, int]]]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    return script_main(lambda: _main(argv))
+    return script_status(lambda: _main(argv))
 
 
 def _main(argv: list[str] | None) -> int:

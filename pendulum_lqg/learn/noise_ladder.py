@@ -42,7 +42,9 @@ from typing import Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.learn.runs import RUNS_FOLDER, output_path, save_figure, script_main, write_text
+from pendulum_lqg.learn.runs import RUNS_FOLDER, output_path, write_text
+from pendulum_lqg.util.files import save_figure
+from pendulum_lqg.util.scripts import script_status
 
 SCORES = RUNS_FOLDER / "noise_ladder"
 FIGURE = RUNS_FOLDER / "figures" / "noise_ladder.png"
@@ -131,7 +133,7 @@ def draw(table: dict[str, dict[float, list[tuple[float, float]]]], suite: str, p
     axes[0].set_ylim(-0.02, 1.02)
     axes[0].legend(fontsize=7, loc="best")
     fig.suptitle(f"Noise ladder on `{suite}`: median and interquartile range across seeds")
-    save_figure(fig, path)
+    save_figure(fig, path, where="--out", what="figure", dpi=120)
 
 
 def markdown(table: dict[str, dict[float, list[tuple[float, float]]]], suite: str) -> str:
@@ -156,7 +158,7 @@ def markdown(table: dict[str, dict[float, list[tuple[float, float]]]], suite: st
 
 
 def main(argv: list[str] | None = None) -> int:
-    return script_main(lambda: _main(argv))
+    return script_status(lambda: _main(argv))
 
 
 def _main(argv: list[str] | None) -> int:

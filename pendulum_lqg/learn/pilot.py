@@ -37,7 +37,8 @@ from typing import Any
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.learn.deep import METHODS, Method
-from pendulum_lqg.learn.runs import RUNS_FOLDER, run_name, script_main, write_text
+from pendulum_lqg.learn.runs import RUNS_FOLDER, run_name, write_text
+from pendulum_lqg.util.scripts import script_status
 
 #: The PPO search space — history length K, the policy's initial log std, the discount γ —
 #: walked one factor at a time from CENTRE (a full grid of 18 variants × 2 seeds would cost 3×).
@@ -180,7 +181,7 @@ def _one(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    return script_main(lambda: _main(argv))
+    return script_status(lambda: _main(argv))
 
 
 def _main(argv: list[str] | None) -> int:

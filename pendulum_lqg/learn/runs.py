@@ -190,39 +190,3 @@ def output_path(where: str, path: str | Path, *, force: bool, what: str) -> Path
     if target.exists() and not force:
         raise ConfigError(f"{where}: {path} exists; give --force to replace it")
     return target
-
-
-def save_figure(fig: Any, path: Path, *, dpi: int = 120) -> None:
-    """``fig`` saved to ``path`` whole or not at all: drawn into a temporary file beside it (same
-    suffix, so the format is the path's), then renamed over it."""
-    import os
-
-    from pendulum_lqg.util.files import regular_target
-
-    target = regular_target("--out", Path(path))
-    tmp = target.with_name(f".{target.stem}.{os.getpid()}.{os.urandom(4).hex()}{target.suffix}")
-    try:
-        fig.savefig(tmp, dpi=dpi)
-        os.replace(tmp, target)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
-def script_main(main: Callable[[], int]) -> int:
-    """Run a ``python -m pendulum_lqg.learn.X`` command with the CLI's contract: a library error is
-    one line ``error: …`` (exit 2), Ctrl-C one line (exit 130), no traceback."""
-    from pendulum_lqg.errors import PendulumLQGError
-
-    try:
-        return main()
-    except PendulumLQGError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("interrupted: stopped by Ctrl-C; files written so far are whole", file=sys.stderr)
-        return 130
-    except OSError as exc:
-        where = f"{exc.filename}: " if exc.filename else ""
-        print(f"error: cannot write or read {where}{exc.strerror or exc}", file=sys.stderr)
-        return 2
