@@ -196,45 +196,60 @@ def _accumulate(JtJ: np.ndarray, Jte: np.ndarray, J: np.ndarray, e: np.ndarray) 
         Jte += block.T @ e[start:start + _ROWS]
 
 
-def _pass(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, K_p: np.ndarray, x0: np.ndarray,
-          data: tuple[np.ndarray, ...], weights: np.ndarray,
-          jac: tuple[PEMLayout, np.ndarray, np.ndarray] | None,
-          ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """One run of the predictor over every episode: the innovations (E, H, p; 0 where not
-    observed) and, with ``jac = (layout, ∂Φ, ∂Γ)`` (derivatives of the free parameters only),
-    ``JᵀJ`` and ``Jᵀe`` of the weighted innovations."""
+def _predict(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, K_p: np.ndarray,
+             x0: np.ndarray, data: tuple[np.ndarray, ...]) -> np.ndarray:
+    """The innovations (E, H, p; 0 where not observed) of the predictor on every episode."""
     Y, Ud, observed, valid = data
     E, H, p = Y.shape
-    n = Phi.shape[0]
-    xh = np.tile(x0, (E, 1))
-    out = np.zeros((E, H, p))
-    JtJ = Jte = None
-    if jac is not None:
-        layout, dPhi, dGamma = jac
-        P, k_s = layout.size, layout.index.size
-        # ∂Φ/∂ϑ_j x̂ + ∂Γ/∂ϑ_j u for every j as one product: [x̂, u] @ D → (E, n·k_s)
-        D = np.concatenate([dPhi, dGamma], axis=2).transpose(2, 1, 0).reshape(n + 1, n * k_s)
-        S = np.zeros((n, E, P))                   # sensitivities, state-major: (n, E·P) products
-        if layout.initial:
-            S[:, :, P - n:] = np.eye(n)[:, None, :]
-        JtJ, Jte = np.zeros((P, P)), np.zeros(P)
+    obs, ended = observed.astype(float)[..., None], ~valid.all(axis=0)
+    xh, out = np.tile(x0, (E, 1)), np.zeros((E, H, p))
     for k in range(H):
-        obs, alive = observed[:, k, None], valid[:, k, None]
-        e = np.where(obs, Y[:, k] - xh @ C.T, 0.0)
-        out[:, k] = e
+        e = out[:, k] = (Y[:, k] - xh @ C.T) * obs[:, k]
         x_next = xh @ Phi.T + Ud[:, k] @ Gamma.T + e @ K_p.T
-        if jac is not None:
-            Jk = (-(C @ S.reshape(n, -1))).reshape(p, E, P) * obs.T[..., None]   # ∂e_k/∂ϑ
-            _accumulate(JtJ, Jte, (Jk * weights[:, None, None]).reshape(-1, P),
-                        (e * weights).T.ravel())
-            S_next = (Phi @ S.reshape(n, -1) + K_p @ Jk.reshape(p, -1)).reshape(n, E, P)
-            S_next[:, :, :k_s] += (np.hstack([xh, Ud[:, k]]) @ D).reshape(E, n, k_s
-                                                                          ).transpose(1, 0, 2)
-            if layout.gain:                                       # ∂(K_p e)/∂K_p[a, b] = e_b 1_a
-                for a in range(n):
-                    S_next[a, :, k_s + a * p:k_s + (a + 1) * p] += e
-            S = np.where(alive.T[..., None], S_next, S)
-        xh = np.where(alive, x_next, xh)
+        xh = np.where(valid[:, k, None], x_next, xh) if ended[k] else x_next
+    return out
+
+
+def _normal_equations(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, K_p: np.ndarray,
+                      x0: np.ndarray, data: tuple[np.ndarray, ...], weights: np.ndarray,
+                      layout: PEMLayout, dPhi: np.ndarray, dGamma: np.ndarray,
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The innovations (as :func:`_predict`) and ``JᵀJ``, ``Jᵀe`` of the weighted innovations
+    ``W e_k``, from the sensitivity recursion (module docstring); ``dPhi``, ``dGamma``: the
+    derivatives of the free structured parameters."""
+    Y, Ud, observed, valid = data
+    E, H, p = Y.shape
+    n, P, k_s = Phi.shape[0], layout.size, layout.index.size
+    obs, ended = observed.astype(float)[..., None], ~valid.all(axis=0)
+    # ∂Φ/∂ϑ_j x̂ + ∂Γ/∂ϑ_j u for every j: x̂ @ Dx + u @ Du → (E, n·k_s), column a·k_s + j
+    Dx = dPhi.transpose(2, 1, 0).reshape(n, n * k_s)
+    Du = dGamma.transpose(2, 1, 0).reshape(1, n * k_s)
+    Cw, Kw = weights[:, None] * C, K_p / weights                 # J rows of W e: −W C S
+    S = np.zeros((n, E, P))                   # sensitivities, state-major: (n, E·P) products
+    if layout.initial:
+        S[:, :, P - n:] = np.eye(n)[:, None, :]
+    steps = max(1, _ROWS // (p * E))          # periods per product folded into JᵀJ
+    Jb, eb = np.zeros((steps, p, E, P)), np.zeros((steps, p, E))
+    JtJ, Jte = np.zeros((P, P)), np.zeros(P)
+    eye = np.arange(n)
+    xh, out = np.tile(x0, (E, 1)), np.zeros((E, H, p))
+    for k in range(H):
+        e = out[:, k] = (Y[:, k] - xh @ C.T) * obs[:, k]
+        slot = k % steps
+        eb[slot] = (e * weights).T
+        Jw = Jb[slot] = (-(Cw @ S.reshape(n, -1))).reshape(p, E, P) * obs[None, :, k]
+        if slot == steps - 1 or k == H - 1:
+            _accumulate(JtJ, Jte, Jb[:slot + 1].reshape(-1, P), eb[:slot + 1].ravel())
+        x_next = xh @ Phi.T + Ud[:, k] @ Gamma.T + e @ K_p.T
+        S_next = (Phi @ S.reshape(n, -1) + Kw @ Jw.reshape(p, -1)).reshape(n, E, P)
+        S_next[:, :, :k_s] += (xh @ Dx + Ud[:, k] @ Du).reshape(E, n, k_s).transpose(1, 0, 2)
+        if layout.gain:                       # ∂(K_p e)/∂K_p[a, b] = e_b 1_a
+            S_next[:, :, k_s:k_s + n * p].reshape(n, E, n, p)[eye, :, eye, :] += e
+        if ended[k]:
+            alive = valid[:, k, None]
+            S, xh = np.where(alive.T[..., None], S_next, S), np.where(alive, x_next, xh)
+        else:
+            S, xh = S_next, x_next
     return out, JtJ, Jte
 
 
@@ -245,8 +260,8 @@ def innovations(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, K_p: np.ndarr
     (module docstring) on episodes ``Y`` (E, H, p; ``nan`` = missing), ``U`` (E, H, 1), ``valid``
     (E, H); ``nan`` where a sample is missing or after its episode ended."""
     data = _data(Y, U, valid, delay)
-    e, _, _ = _pass(np.asarray(Phi, float), np.asarray(Gamma, float), np.asarray(C, float),
-                    np.asarray(K_p, float), np.asarray(x0, float), data, np.ones(C.shape[0]), None)
+    e = _predict(np.asarray(Phi, float), np.asarray(Gamma, float), np.asarray(C, float),
+                 np.asarray(K_p, float), np.asarray(x0, float), data)
     return np.where(data[2][..., None], e, np.nan)
 
 
@@ -273,7 +288,7 @@ def fit_innovations(Y: np.ndarray, U: np.ndarray, valid: np.ndarray, dt: float, 
                     params: np.ndarray, K_p: np.ndarray, x0: np.ndarray, delay: int = 0,
                     free: np.ndarray | None = None, gain: bool = True, initial: bool = True,
                     weights: np.ndarray | None = None, max_iterations: int = 60,
-                    rtol: float = 1e-9) -> InnovationsModel:
+                    rtol: float = 1e-6, atol: float = 0.0) -> InnovationsModel:
     """The prediction-error estimate of the innovations form (module docstring) from episodes
     ``Y`` (E, H, p; ``nan`` = missing sample), ``U`` (E, H, 1) the applied force, ``valid``
     (E, H) the samples logged before each episode ended.
@@ -287,8 +302,9 @@ def fit_innovations(Y: np.ndarray, U: np.ndarray, valid: np.ndarray, dt: float, 
     gain : fit ``K_p`` (False: keep it, e.g. 0 for an output-error fit of open-loop data)
     initial : fit ``x0``
     weights : (p,) per-output weights ``W`` of the innovations (default 1)
-    max_iterations, rtol : stop after that many steps, or when a step lowers the cost by less
-        than ``rtol`` of it
+    max_iterations, rtol, atol : stop after that many steps, or when a step lowers the cost
+        ``Σ‖W e_k‖²`` by less than ``rtol`` of it or less than ``atol`` (with ``W`` the inverse
+        innovation std, the cost is in χ² units: a step of 0.05 changes no decision)
     """
     data = _data(Y, U, valid, delay)
     p = data[0].shape[2]
@@ -305,41 +321,23 @@ def fit_innovations(Y: np.ndarray, U: np.ndarray, valid: np.ndarray, dt: float, 
     if count <= layout.size:
         raise DesignError(f"fit_innovations: {count} observed samples for {layout.size} parameters")
 
-    def evaluate(theta: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, tuple]:
+    def evaluate(theta: np.ndarray, jac: bool) -> tuple[float, tuple[Any, ...]]:
         pr, Kp, x = layout.unpack(theta, params, K_p, x0)
         Phi, Gamma, C, _, _ = structured_model(pr, p, dt)
-        dPhi, dGamma = structured_derivatives(pr, p, dt)
         with np.errstate(over="ignore", invalid="ignore"):
-            e, JtJ, Jte = _pass(Phi, Gamma, C, Kp, x, data, w,
-                                (layout, dPhi[layout.index], dGamma[layout.index]))
-        cost = float(np.sum((e * w) ** 2))
-        return (cost if np.isfinite(cost) else np.inf), JtJ, Jte, (pr, Kp, x, e)
+            if jac:
+                dPhi, dGamma = structured_derivatives(pr, p, dt)
+                e, JtJ, Jte = _normal_equations(Phi, Gamma, C, Kp, x, data, w, layout,
+                                                dPhi[layout.index], dGamma[layout.index])
+            else:
+                e, JtJ, Jte = _predict(Phi, Gamma, C, Kp, x, data), None, None
+            cost = float(np.sum((e * w) ** 2))
+        return (cost if np.isfinite(cost) else np.inf), (JtJ, Jte, pr, Kp, x, e)
 
-    theta = layout.pack(params, K_p, x0)
-    cost, JtJ, Jte, best = evaluate(theta)
-    if not np.isfinite(cost):
-        raise DesignError("fit_innovations: the starting predictor diverges on the data "
-                          "(start from a stabilising K_p)")
-    damping, steps = 1e-3, 0
-    for _ in range(max_iterations):
-        scale = np.maximum(np.diag(JtJ), 1e-12 * max(np.diag(JtJ).max(), 1e-300))
-        try:
-            step = np.linalg.solve(JtJ + damping * np.diag(scale), -Jte)
-        except np.linalg.LinAlgError:
-            damping *= 10.0
-            continue
-        trial = evaluate(theta + step)
-        if trial[0] < cost:
-            gain_ = cost - trial[0]
-            theta, (cost, JtJ, Jte, best), steps = theta + step, trial, steps + 1
-            damping = max(damping / 3.0, 1e-10)
-            if gain_ <= rtol * cost:
-                break
-        else:
-            damping *= 4.0
-            if damping > 1e10:
-                break
-    pr, Kp, x, e = best
+    cost, best, steps = _levenberg_marquardt(evaluate, layout.pack(params, K_p, x0),
+                                             max_iterations=max_iterations, rtol=rtol,
+                                             atol=atol)
+    _, _, pr, Kp, x, e = best
     Phi, Gamma, C, A, B = structured_model(pr, p, dt)
     e = np.where(data[2][..., None], e, np.nan)
     return InnovationsModel(params=pr, Phi=Phi, Gamma=Gamma, C=C, A=A, B=B, K_p=Kp, x0=x,
@@ -347,17 +345,56 @@ def fit_innovations(Y: np.ndarray, U: np.ndarray, valid: np.ndarray, dt: float, 
                             S=innovation_covariance(e), samples=count, iterations=steps)
 
 
+def _levenberg_marquardt(evaluate: Any, theta: np.ndarray, *, max_iterations: int, rtol: float,
+                         atol: float) -> tuple[float, tuple[Any, ...], int]:
+    """Minimise the cost of ``evaluate(θ, jac) -> (cost, (JᵀJ, Jᵀe, …))`` (``JᵀJ``, ``Jᵀe`` when
+    ``jac``) from ``θ`` by Levenberg–Marquardt with Marquardt's scaling ``diag(JᵀJ)``; a trial
+    step runs the predictor only, an accepted one the sensitivities too. Returns the cost, the
+    last accepted evaluation and the number of accepted steps."""
+    cost, best = evaluate(theta, True)
+    if not np.isfinite(cost):
+        raise DesignError("fit_innovations: the starting predictor diverges on the data "
+                          "(start from a stabilising K_p)")
+    damping, steps = 1e-3, 0
+    for _ in range(max_iterations):
+        JtJ, Jte = best[0], best[1]
+        scale = np.maximum(np.diag(JtJ), 1e-12 * max(np.diag(JtJ).max(), 1e-300))
+        try:
+            step = np.linalg.solve(JtJ + damping * np.diag(scale), -Jte)
+        except np.linalg.LinAlgError:
+            damping *= 10.0
+            continue
+        trial, _ = evaluate(theta + step, False)
+        if trial < cost:
+            theta, steps = theta + step, steps + 1
+            reduction = cost - trial
+            cost, best = evaluate(theta, True)
+            damping = max(damping / 3.0, 1e-10)
+            if reduction <= max(rtol * cost, atol):
+                break
+        else:
+            damping *= 4.0
+            if damping > 1e10:
+                break
+    return cost, best, steps
+
+
 def fit_delays(Y: np.ndarray, U: np.ndarray, valid: np.ndarray, dt: float, *,
-               delays: range | list[int], **options: Any) -> tuple[InnovationsModel,
-                                                                   dict[int, float]]:
-    """The best :func:`fit_innovations` over candidate ``delays`` (the lowest cost, i.e. the
-    smallest innovations on the same samples), and every candidate's cost. ``options`` are
-    :func:`fit_innovations`'s keywords (the same start for every candidate)."""
+               delays: range | list[int], params: np.ndarray, K_p: np.ndarray, x0: np.ndarray,
+               free: np.ndarray | None = None, gain: bool = True, initial: bool = True,
+               weights: np.ndarray | None = None, max_iterations: int = 60, atol: float = 0.0,
+               ) -> tuple[InnovationsModel, dict[int, float]]:
+    """The best :func:`fit_innovations` over the candidate ``delays`` — the lowest cost, i.e. the
+    smallest innovations on the same samples (every candidate has as many parameters) — and
+    every candidate's cost (``inf`` where the fit failed). The other keywords are
+    :func:`fit_innovations`'s, the same start for every candidate."""
     best: InnovationsModel | None = None
     costs: dict[int, float] = {}
     for d in delays:
         try:
-            model = fit_innovations(Y, U, valid, dt, delay=int(d), **options)
+            model = fit_innovations(Y, U, valid, dt, delay=int(d), params=params, K_p=K_p, x0=x0,
+                                    free=free, gain=gain, initial=initial, weights=weights,
+                                    max_iterations=max_iterations, atol=atol)
         except DesignError:
             costs[int(d)] = float("inf")
             continue

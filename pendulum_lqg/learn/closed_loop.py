@@ -97,8 +97,13 @@ class ClosedLoopSettings:
     caution : the factor on the identified process noise of the first design's Kalman filter.
         The 4-number model is rough: its filter must follow the measurements, not the model.
     max_delay : the largest delay tried [periods].
+    screen_episodes, screen_iterations : the closed-loop rounds choose the delay by fits of at
+        most this many Levenberg–Marquardt steps on their last this many episodes, then fit the
+        chosen delay on every episode: the choice needs far fewer data than the fit.
     validation_episodes : held-out episodes of the validation figure.
     max_iterations : Levenberg–Marquardt steps per fit.
+    tolerance : a closed-loop fit stops when a step lowers its cost, in χ² units (innovations
+        weighted by their std), by less than this: far below what changes a decision.
     """
 
     dither: float = 1.0
@@ -109,11 +114,14 @@ class ClosedLoopSettings:
     burst_force: float = 0.5
     caution: float = 100.0
     max_delay: int = 8
+    screen_episodes: int = 20
+    screen_iterations: int = 8
     validation_episodes: int = 4
-    max_iterations: int = 60
+    max_iterations: int = 30
+    tolerance: float = 0.05
 
     def __post_init__(self) -> None:
-        for name in ("dither", "burst_force", "caution"):
+        for name in ("dither", "burst_force", "caution", "tolerance"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float) \
                     or not np.isfinite(value) or value <= 0:
@@ -122,7 +130,8 @@ class ClosedLoopSettings:
             raise ConfigError(f"burst_force: expected a fraction of the actuator limit ≤ 1, "
                               f"got {self.burst_force!r}")
         for name, low in (("rounds", 1), ("episodes", 1), ("open_loop_steps", 1), ("burst", 3),
-                          ("max_delay", 0), ("validation_episodes", 1), ("max_iterations", 1)):
+                          ("max_delay", 0), ("screen_episodes", 1), ("screen_iterations", 1),
+                          ("validation_episodes", 1), ("max_iterations", 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ConfigError(f"{name}: expected an integer ≥ {low}, got {value!r}")
@@ -302,9 +311,15 @@ def _closed_loop_model(data: _Episodes, env: _Env, start: dict[str, Any],
     the delay among the last one and its neighbours."""
     d = int(start["delay"])
     delays = [c for c in (d, d - 1, d + 1) if 0 <= c <= settings.max_delay]
-    return pem.fit_delays(data.Y, data.U, data.valid, env.dt, delays=delays,
-                          params=start["params"], K_p=start["K_p"], x0=start["x0"],
-                          weights=start["weights"], max_iterations=settings.max_iterations)
+    options = {"params": start["params"], "K_p": start["K_p"], "x0": start["x0"],
+               "weights": start["weights"], "atol": settings.tolerance}
+    recent = slice(max(0, data.valid.shape[0] - settings.screen_episodes), None)
+    screened, costs = pem.fit_delays(data.Y[recent], data.U[recent], data.valid[recent], env.dt,
+                                     delays=delays, max_iterations=settings.screen_iterations,
+                                     **options)
+    options.update(params=screened.params, K_p=screened.K_p, x0=screened.x0)
+    return pem.fit_innovations(data.Y, data.U, data.valid, env.dt, delay=screened.delay,
+                               max_iterations=settings.max_iterations, **options), costs
 
 
 def _validation(models: list[dict[str, Any]], data: _Episodes, env: _Env) -> list[dict[str, Any]]:
