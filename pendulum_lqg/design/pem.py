@@ -201,7 +201,8 @@ def _predict(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, K_p: np.ndarray,
     """The innovations (E, H, p; 0 where not observed) of the predictor on every episode."""
     Y, Ud, observed, valid = data
     E, H, p = Y.shape
-    obs, ended = observed.astype(float)[..., None], ~valid.all(axis=0)
+    obs = observed.astype(float)[..., None]
+    ended = np.logical_not(valid.all(axis=0))
     xh, out = np.tile(x0, (E, 1)), np.zeros((E, H, p))
     for k in range(H):
         e = out[:, k] = (Y[:, k] - xh @ C.T) * obs[:, k]
@@ -220,7 +221,8 @@ def _normal_equations(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, K_p: np
     Y, Ud, observed, valid = data
     E, H, p = Y.shape
     n, P, k_s = Phi.shape[0], layout.size, layout.index.size
-    obs, ended = observed.astype(float)[..., None], ~valid.all(axis=0)
+    obs = observed.astype(float)[..., None]
+    ended = np.logical_not(valid.all(axis=0))
     # ∂Φ/∂ϑ_j x̂ + ∂Γ/∂ϑ_j u for every j: x̂ @ Dx + u @ Du → (E, n·k_s), column a·k_s + j
     Dx = dPhi.transpose(2, 1, 0).reshape(n, n * k_s)
     Du = dGamma.transpose(2, 1, 0).reshape(1, n * k_s)

@@ -192,7 +192,7 @@ class _Env:
         self.suite, self.root = suite, root
         self.u_max = float(limits(suite.plants()[1], sc)[2])
         self.dt = float(sc.control_period)
-        self.periods = int(round(sc.duration / sc.control_period))
+        self.periods = round(sc.duration / sc.control_period)
         self.Q, self.R = np.diag(sc.cost_Q), np.array([[sc.cost_R]])
         noise = sc.noise
         self.sensor_std = np.sqrt(np.diag(noise.V)) * noise.scale
@@ -303,6 +303,23 @@ def _first_sample(data: _Episodes) -> np.ndarray:
     return data.Y[rows, first[rows]].mean(axis=0)
 
 
+def _cautious_design(data: _Episodes, env: _Env, settings: ClosedLoopSettings,
+                     ) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
+    """The open-loop round: the controller (cautious filter), the model's record and the start
+    of the first closed-loop fit (the model, its Kalman predictor gain, innovation weights)."""
+    m0, costs0, W, V = _open_loop_model(data, env, settings)
+    L0 = design.dkalman(m0.Phi, np.eye(4), m0.C, settings.caution * W, V).L
+    ss = certainty_equivalent(m0.Phi, m0.Gamma, m0.A, m0.B, L0, delay=m0.delay, Q=env.Q,
+                              R=env.R, dt=env.dt)
+    K_p0 = design.dkalman(m0.Phi, np.eye(4), m0.C, W, V).L_pred
+    record = {**m0.to_dict(), "K_p": K_p0.tolist(), "L": L0.tolist(), "W": np.diag(W).tolist(),
+              "V": np.diag(V).tolist(), "caution": settings.caution, "delay_costs": costs0,
+              "fit": "output error, 4 numbers (A22 = 0), open-loop bursts"}
+    start = {"params": m0.params, "K_p": K_p0, "x0": m0.x0, "delay": m0.delay,
+             "weights": 1.0 / np.sqrt(np.diag(V))}
+    return ss, record, start
+
+
 def _closed_loop_model(data: _Episodes, env: _Env, start: dict[str, Any],
                        settings: ClosedLoopSettings,
                        ) -> tuple[pem.InnovationsModel, dict[int, float]]:
@@ -374,19 +391,12 @@ def identify_closed_loop(suite: Any, *, root: int, steps: int | None = None,
                           "from y = [p, θ]")
     bursts, per_round = _plan(steps, env, settings)
     data0 = _bursts(env, bursts, settings)
-    m0, costs0, W, V = _open_loop_model(data0, env, settings)
-    L0 = design.dkalman(m0.Phi, np.eye(4), m0.C, settings.caution * W, V).L
-    ss = certainty_equivalent(m0.Phi, m0.Gamma, m0.A, m0.B, L0, delay=m0.delay, Q=env.Q,
-                              R=env.R, dt=env.dt)
-    K_p0 = design.dkalman(m0.Phi, np.eye(4), m0.C, W, V).L_pred
-    models = [{**m0.to_dict(), "K_p": K_p0.tolist(), "L": L0.tolist(), "W": np.diag(W).tolist(),
-               "V": np.diag(V).tolist(), "caution": settings.caution, "delay_costs": costs0,
-               "fit": "output error, 4 numbers (A22 = 0), open-loop bursts"}]
-    say(f"open loop: {data0.logged:,} steps in {bursts} bursts, delay {m0.delay}, "
-        f"a = {m0.A[2, 1]:.3g}, c = {m0.A[3, 1]:.3g}, b = {m0.B[2:, 0].round(3).tolist()}")
+    ss, first, start = _cautious_design(data0, env, settings)
+    models = [first]
+    say(f"open loop: {data0.logged:,} steps in {bursts} bursts, delay {first['delay']}, "
+        f"a = {first['A'][2][1]:.3g}, c = {first['A'][3][1]:.3g}, b = "
+        f"{np.round(np.asarray(first['B'])[2:, 0], 3).tolist()}")
     results = [(data0.logged, env.stepped, ss)]
-    start = {"params": m0.params, "K_p": K_p0, "x0": m0.x0, "delay": m0.delay,
-             "weights": 1.0 / np.sqrt(np.diag(V))}
     rng, closed = np.random.default_rng([root, 3]), None
     for r in range(1, settings.rounds + 1):
         new = _closed_loop(env, ss, per_round, settings.dither, rng)

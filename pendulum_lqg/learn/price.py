@@ -87,8 +87,8 @@ def _done(path: Path) -> list[dict[str, Any]]:
 
 def run(out: Path, *, suites: Sequence[str], seeds: Sequence[int], budgets: Sequence[int],
         resume: bool) -> list[dict[str, Any]]:
-    """Every (budget, suite, seed) row not yet in ``out`` (smallest budgets first), ``out``
-    rewritten atomically after each."""
+    """Every (suite, seed, budget) row not yet in ``out``, ``out`` rewritten atomically after
+    each; seed by seed (a run stopped early has whole curves of its first seeds)."""
     from pendulum_lqg.scoreboard import episodes as ep
     from pendulum_lqg.scoreboard.suites import load_suite
     from pendulum_lqg.util.files import atomic_write, rows_to_csv
@@ -97,9 +97,9 @@ def run(out: Path, *, suites: Sequence[str], seeds: Sequence[int], budgets: Sequ
     done = {(r["suite"], int(r["seed"]), int(r["budget"])) for r in rows}
     loaded = {name: load_suite(name) for name in suites}
     references: dict[str, list[dict[str, Any]]] = {}
-    for budget in sorted(budgets):
-        for name, suite in loaded.items():
-            for seed in seeds:
+    for seed in seeds:
+        for budget in sorted(budgets):
+            for name, suite in loaded.items():
                 if (suite.name, seed, budget) in done:
                     continue
                 if name not in references:
