@@ -87,8 +87,9 @@ class ClosedLoopSettings:
     rounds : closed-loop rounds. Two: the first runs the cautious controller, whose data give a
         model good enough that the second's data are taken where the final loop operates.
     episodes : episodes per closed-loop round (of the suite's duration) in the default recipe.
-        Thirty 10 s episodes per round: the prediction error is then within a percent of the
-        sensor's floor; the default recipe logs at most 70 000 steps.
+        Thirty 10 s episodes per round: enough for a model whose one-step prediction error on
+        held-out data is the true model's Kalman predictor's; the default recipe logs at most
+        70 000 steps (episodes that fail end early).
     open_loop_steps : logged steps of open-loop bursts (at most a fifth of a given budget).
         Enough for a 4-number model that stabilises under the cautious filter.
     burst : periods of one open-loop burst. The pole falls from θ₀ in about half a second.
