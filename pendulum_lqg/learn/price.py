@@ -19,8 +19,10 @@ half-way keeps what it finished (``--resume`` continues it).
 axes; median and interquartile range over the seeds), the deep-RL methods' committed learning
 curves (``METHOD-seedS-curve.csv`` of ``--curves``: their own 20 fixed lecture-like episodes, so
 drawn on the ``lecture`` panel only) on the same axes, and the least-squares slope of
-``log(median gap)`` against ``log(median logged steps)`` over the budgets whose median gap is
-positive, beside the ``1/N`` rate of certainty equivalence (Mania, Tu & Recht 2019), printed.
+``log(median gap)`` against ``log(budget)`` over the budgets whose median gap is positive, beside
+the ``1/N`` rate of certainty equivalence (Mania, Tu & Recht 2019), printed. The x position of a
+budget is the budget: it caps the logged steps (a run whose episodes fail early logs fewer, and
+the CSV says how many).
 """
 
 from __future__ import annotations
@@ -123,21 +125,21 @@ def _number(x: Any) -> float:
 
 def summary(rows: list[dict[str, Any]], suite: str, key: str,
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(median logged steps, median, q25, q75)`` of ``key`` over the seeds, per budget."""
+    """``(budgets, median, q25, q75)`` of ``key`` over the seeds, per budget (a budget caps the
+    logged steps; a run whose episodes fail early logs fewer)."""
     budgets = sorted({int(r["budget"]) for r in rows if r["suite"] == suite})
-    out = np.full((4, len(budgets)), np.nan)
+    out = np.full((3, len(budgets)), np.nan)
     for i, b in enumerate(budgets):
-        sel = [r for r in rows if r["suite"] == suite and int(r["budget"]) == b]
-        values = np.array([_number(r[key]) for r in sel])
-        out[0, i] = np.median([float(r["logged_steps"]) for r in sel])
+        values = np.array([_number(r[key]) for r in rows
+                           if r["suite"] == suite and int(r["budget"]) == b])
         if np.isfinite(values).any():
-            out[1:, i] = np.nanpercentile(values, [50, 25, 75])
-    return out[0], out[1], out[2], out[3]
+            out[:, i] = np.nanpercentile(values, [50, 25, 75])
+    return np.array(budgets, dtype=float), out[0], out[1], out[2]
 
 
 def gap_slope(rows: list[dict[str, Any]], suite: str) -> tuple[float, float, int]:
     """``(slope, intercept, budgets)`` of the least-squares line through ``log median gap``
-    against ``log median logged steps``, over the budgets whose median gap is positive."""
+    against ``log budget``, over the budgets whose median gap is positive."""
     steps, med, _, _ = summary(rows, suite, "gap")
     keep = np.isfinite(med) & (med > 0)
     if keep.sum() < 2:
@@ -194,24 +196,24 @@ def draw(rows: list[dict[str, Any]], curves: dict[str, list[dict[str, np.ndarray
                 _rl_curve(top, method, runs)
         top.axhline(1.0, color="grey", lw=0.8)
         top.set(xscale="log", ylim=(-0.02, 1.08), title=suite, ylabel="failure-aware score",
-                xlabel="logged env steps")
+                xlabel="logged env steps (sysid-lqg: the budget; RL: env steps)")
         top.legend(fontsize=7, loc="lower right")
         steps, med, q25, q75 = summary(rows, suite, "gap")
         slope, intercept, count = slopes[suite] = gap_slope(rows, suite)
         pos = np.isfinite(med) & (med > 0)
         bottom.plot(steps[pos], med[pos], "o-", color="k", label="median gap J/J* − 1")
-        bottom.fill_between(steps, np.maximum(q25, 1e-4), np.maximum(q75, 1e-4), color="k",
-                            alpha=0.15)
+        band = np.isfinite(q25) & (q25 > 0)
+        bottom.fill_between(steps[band], q25[band], q75[band], color="k", alpha=0.15)
         if count >= 2:
             x = steps[pos]
             bottom.plot(x, np.exp(intercept) * x ** slope, color="C3",
                         label=f"fit: slope {slope:.2f}")
             bottom.plot(x, med[pos][0] * (x / x[0]) ** -1.0, color="C0", ls=":", label="1/N")
         bottom.set(xscale="log", yscale="log", ylabel="gap J/J* − 1 (positive part)",
-                   xlabel="logged env steps")
+                   xlabel="logged env-step budget")
         bottom.legend(fontsize=7)
-    fig.suptitle("The price of not knowing the model: closed-loop identification + LQG "
-                 "(median and IQR over data seeds; each suite's 100 episodes)")
+    fig.suptitle("The price of not knowing the model: closed-loop identification + LQG\n"
+                 "(median and IQR over data seeds; each suite's 100 episodes)", fontsize=10)
     fig.savefig(path, dpi=120)
     return slopes
 
