@@ -3,6 +3,8 @@
     uv run python benchmarks/leaderboard.py --out docs/leaderboard --force   # built-ins, plug-ins,
                                                                             # Gymnasium agents
     python benchmarks/leaderboard.py --rl --out docs/leaderboard --force     # the RL models (rl extra)
+    python benchmarks/leaderboard.py --rl --match 'rl_sysid-lqg-*' --out docs/leaderboard --force
+                                                                            # only these runs
     uv run pendulum-lqg board docs/leaderboard/scores --out docs/leaderboard/board.md
 
 Without ``--out`` the scores and the board go to a fresh folder ``runs/leaderboard-<UTC time>``;
@@ -15,6 +17,7 @@ suites' reference and full-state rows are computed once, not once per entry.
 
 from __future__ import annotations
 
+import fnmatch
 import json
 import time
 from pathlib import Path
@@ -74,10 +77,11 @@ def main(argv: list[str] | None = None) -> None:
                     help="replace the scores and the board that --out already holds")
     ap.add_argument("--rl", action="store_true", help="score only the RL models (the rl extra)")
     ap.add_argument("--models", type=Path, default=ROOT / "experiments" / "agents" / "models")
+    ap.add_argument("--match", default=None, metavar="PATTERN",
+                    help="score only the entries whose score file's name matches PATTERN "
+                         "(fnmatch, e.g. 'rl_sysid-lqg-*'; the board still reads every score)")
     args = ap.parse_args(argv)
     if args.rl:
-        requires("stable_baselines3", needed_for="--rl (the RL models)",
-                 install="the rl extra: uv sync --extra rl")
         if not args.models.is_dir():
             raise ConfigError(f"--models: expected the folder of the trained models, got "
                               f"{str(args.models)!r}")
@@ -87,6 +91,13 @@ def main(argv: list[str] | None = None) -> None:
         *[(p, {"policy": p}) for p in BUILTINS],
         *[(f, {"policy": ref}) for f, ref in PLUGINS.items()],
         *[(f, {"agent": ref}) for f, ref in AGENTS.items()]]
+    if args.match is not None:
+        entries = [(f, e) for f, e in entries if fnmatch.fnmatchcase(f, args.match)]
+        if not entries:
+            raise ConfigError(f"--match: no entry's score file matches {args.match!r}")
+    if any(str(e.get("agent", "")).startswith("sb3:") for _, e in entries):
+        requires("stable_baselines3", needed_for="--rl (the RL models)",
+                 install="the rl extra: uv sync --extra rl")
     scores = output_folder("--out", out, what="scores and the board") / "scores"
     output_folder("--out", scores, what="score files")
     targets = [scores / f"{file}.json" for file, _ in entries] + [out / "board.md"]
