@@ -72,10 +72,13 @@ def test_theory_cli_on_the_double_integrator(capsys):
 
 
 @pytest.mark.parametrize("table, message", [
-    ({"control_period": 0.1, "A": [[0, 1], [0, 0]]}, "A and B are required together"),
-    ({"control_period": 0.1, "A": [[0, 1]], "B": [[0], [1]]}, "A: expected shape"),
+    ({"control_period": 0.1, "A": [[0, 1], [0, 0]]}, "B: missing \\(A and B go together\\)"),
+    ({"control_period": 0.1, "A": [[0, 1]], "B": [[0], [1]]}, r"A: expected a \(1 × 1\) .*"
+                                                             r"got shape \(1, 2\)"),
     ({"control_period": 0.1, "A": [[0]], "B": [[1]], "Phi": [[1]]}, "either A and B"),
-    ({"control_period": 0.1, "A": [[0]], "B": [[1]], "W": [-1]}, "W: expected 1 finite"),
+    ({"control_period": 0.1, "A": [[0]], "B": [[1]], "W": [-1]}, "W: expected a symmetric "
+                                                              "positive semidefinite matrix, got "
+                                                              "smallest eigenvalue -1"),
     ({"control_period": 0.1, "A": [[0]], "B": [[1]], "bogus": 1}, "unknown key 'bogus'"),
     ({"control_period": -1, "A": [[0]], "B": [[1]]}, "control_period"),
 ])
