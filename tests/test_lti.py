@@ -183,3 +183,42 @@ def test_bench_lti_experiment_refuses_the_cartpoles_keys(tmp_path, extra, messag
     path.write_text(f'lti_file = "{EXPERIMENTS / "double_integrator.toml"}"\n' + extra)
     with pytest.raises(ConfigError, match=message):
         load_spec(str(path))
+
+
+# ---- design --lti -------------------------------------------------------------------------------
+def test_design_lti_double_integrator_gives_the_textbook_gains(capsys):
+    """K = [1, √2] (LQR with Q = CᵀC, R = 1) and L = [√3, 1]ᵀ (Kalman–Bucy with W = I₂ and the
+    measurement density V·T = 1): docs/theory.md §5.2."""
+    import json
+
+    assert main(["design", "--lti", str(EXPERIMENTS / "double_integrator.toml"), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    np.testing.assert_allclose(d["K_lqr"], [[1.0, math.sqrt(2)]], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(d["L_kalman"], [[math.sqrt(3)], [1.0]], rtol=0, atol=1e-9)
+    assert d["states"] == ["position", "velocity"] and d["inputs"] == ["u1"]
+    assert d["separation"]["continuous_max_error"] < 1e-12
+    assert d["separation"]["discrete_max_error"] < 1e-12
+    # the discrete gains are the ones run --lti's policies use
+    for name, key in (("dlqr+kalman", "L_dkalman"), ("dlqr+luenberger", "L_dluenberger")):
+        policy = design_lti_policy(load_lti(EXPERIMENTS / "double_integrator.toml"), name)
+        np.testing.assert_allclose(policy.K, d["K_dlqr"], rtol=1e-12)
+        np.testing.assert_allclose(policy.info["L"], d[key], rtol=1e-12)
+
+
+def test_design_lti_of_a_discrete_plant_has_only_the_discrete_designs(capsys):
+    import json
+
+    assert main(["design", "--lti", str(EXPERIMENTS / "ogata_discrete.toml"), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    np.testing.assert_allclose(d["K_dlqr"], [[1.0, 0.7913]], atol=1e-4)     # Ogata's table
+    assert "K_lqr" not in d and "A" not in d and "continuous_max_error" not in d["separation"]
+    assert main(["design", "--lti", str(EXPERIMENTS / "ogata_discrete.toml")]) == 0
+    out = capsys.readouterr().out
+    assert "Discrete LQR" in out and "Continuous LQR" not in out
+
+
+@pytest.mark.parametrize("extra", [["--q", "1,1"], ["--dt", "0.02"], ["--model", "x.xml"]])
+def test_design_lti_refuses_the_cartpoles_options(capsys, extra):
+    path = str(EXPERIMENTS / "double_integrator.toml")
+    assert main(["design", "--lti", path, *extra]) == 2
+    assert f"{extra[0]}: not with --lti" in capsys.readouterr().err
