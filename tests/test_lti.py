@@ -12,7 +12,7 @@ import pytest
 from pendulum_lqg.cli import main
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.lti import load_lti, lti_from_mapping
-from pendulum_lqg.policies.lti import design_lti_policy, lti_theory
+from pendulum_lqg.policies.lti import design_lti_policy, lti_scenario, lti_theory
 
 EXPERIMENTS = Path(__file__).resolve().parents[1] / "experiments" / "lti"
 
@@ -129,7 +129,7 @@ def test_run_cli_on_the_double_integrator_gives_run_episodes_rows(capsys):
 
 @pytest.mark.parametrize("extra, message", [
     (["--theta0", "0.2"], "--theta0: not with --lti"),
-    (["--plot", "x.png"], "--plot: not with --lti"),
+    (["--record", "x.rrd"], "--record: not with --lti"),
     (["--plant", "linear-euler"], "--plant: an LTI plant runs"),
     (["--policy", "plug.py:make"], "--policy: with --lti, a built-in"),
     (["--dt", "0.05"], "--dt: the LTI plant 'double_integrator' is sampled at 0.01 s"),
@@ -222,3 +222,37 @@ def test_design_lti_refuses_the_cartpoles_options(capsys, extra):
     path = str(EXPERIMENTS / "double_integrator.toml")
     assert main(["design", "--lti", path, *extra]) == 2
     assert f"{extra[0]}: not with --lti" in capsys.readouterr().err
+
+
+# ---- pictures of any plant ----------------------------------------------------------------------
+@pytest.mark.parametrize("file, labels", [
+    ("double_integrator.toml", ["position", "velocity", "y1", "u1"]),
+    ("two_mass.toml", ["p1", "p2", "v1", "v2", "y1", "y2", "f1", "f2"]),
+])
+def test_episode_figure_of_an_lti_plant_has_a_panel_per_state_output_and_input(file, labels):
+    """n + p + m panels, each labelled with the file's name; the input panels draw the limit in
+    force (the two-mass file's ±5 N per motor) and the output panels y and C x."""
+    from pendulum_lqg.analysis.episode_plot import plot_episode
+    from pendulum_lqg.core.runner import run_episodes
+
+    plant = load_lti(EXPERIMENTS / file)
+    sc = lti_scenario(plant, duration=1.0)
+    tr = run_episodes(plant, sc, design_lti_policy(plant, "dlqr+kalman"), seed=0, episodes=[0],
+                      trajectory=True).trajectories[0]
+    fig = plot_episode(tr, plant=plant, scenario=sc)
+    assert [ax.get_ylabel() for ax in fig.axes] == labels
+    n, p = plant.n_states, plant.n_outputs
+    for j, ax in enumerate(fig.axes[n + p:]):
+        limits = sorted(line.get_ydata()[0] for line in ax.lines if line.get_linestyle() == "--")
+        assert limits == ([-5.0, 5.0] if file == "two_mass.toml" else [])
+        np.testing.assert_array_equal(ax.lines[-1 - len(limits)].get_ydata(),
+                                      np.asarray(tr.u).reshape(len(tr.t), -1)[:, j])
+    np.testing.assert_array_equal(fig.axes[n].lines[1].get_ydata(), tr.y_true[:, 0])
+
+
+def test_run_lti_plot_writes_the_picture(tmp_path, capsys):
+    path = tmp_path / "two.png"
+    assert main(["run", "--lti", str(EXPERIMENTS / "two_mass.toml"), "--episodes", "2",
+                 "--duration", "1", "--plot", str(path)]) == 0
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"plot: {path} (episode 0)" in capsys.readouterr().err

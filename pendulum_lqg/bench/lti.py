@@ -134,5 +134,7 @@ def lti_theory_entry(cfg: Any) -> dict[str, Any] | None:
     for s in plant.state_names:
         out[f"rms_{s}"] = res.rms[s]
         out[f"rms_est_err_{s}"] = res.estimate_error_std[s]
-    out.update(rms_u=res.u_std, cost_rate=res.cost_rate, cost_J=res.cost_J, verdict=res.verdict)
+    if plant.n_inputs == 1:             # the theory's u_std is one input's
+        out["rms_u"] = res.u_std
+    out.update(cost_rate=res.cost_rate, cost_J=res.cost_J, verdict=res.verdict)
     return out

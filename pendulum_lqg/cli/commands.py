@@ -42,8 +42,11 @@ def cmd_run(args: argparse.Namespace) -> int:
         from pendulum_lqg.cli.lti import lti_report, lti_run_setup
 
         lti, lti_sc, lti_policy, lti_config = lti_run_setup(args, name)
+        _check_plot_args(args)
         with _watchdog(args):
             lti_res = _run_in_batches(lti, lti_sc, lti_policy, args, trajectory=False)
+        if args.plot is not None:
+            _plot_episode(lti, lti_sc, lti_policy, args, None)
         return lti_report(args, lti_config, lti_sc, lti_res.rows)
     plant = load_plant(args.model)
     scenario = scenario_from_args(args)

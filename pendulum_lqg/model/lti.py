@@ -140,8 +140,9 @@ class LTIPlant:
         return float(np.max(self.limits_per_input))
 
     @property
-    def u_max(self) -> float:
-        return self.force_limit
+    def u_max(self) -> Any:
+        """The limit the core saturates to: a float for one input, (m,) for several."""
+        return self.force_limit if self.n_inputs == 1 else self.limits_per_input
 
     @property
     def n_states(self) -> int:

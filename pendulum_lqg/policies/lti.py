@@ -11,13 +11,14 @@ from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.lti import LTI_CONTROLLERS, LTI_OBSERVERS, LTIPlant
 
 
-def design_lti_policy(plant: LTIPlant, name: str, *, u_max: float | None = None) -> Any:
+def design_lti_policy(plant: LTIPlant, name: str, *,
+                      u_max: float | np.ndarray | None = None) -> Any:
     """The built-in policy ``"controller+observer"`` on ``plant``: ``lqr`` (continuous, emulated
     under sample-and-hold) or ``dlqr`` (on the ZOH model with the exact sampled cost weights);
     observers ``none``, ``kalman`` (steady-state filter, current form), ``kalman-predictor``,
     ``luenberger`` (current form, the plant's ``observer_poles`` by z = e^{sT}, default three
-    times the controller's). ``u_max``: the force limit in force, to which the policy saturates
-    its own output (default the file's ``force_limit``). Returns a
+    times the controller's). ``u_max``: the limit in force, one or one per input, to which the
+    policy saturates its own output (default the file's ``force_limit``). Returns a
     :class:`~pendulum_lqg.policies.lqg.Policy`."""
     from pendulum_lqg import design
     from pendulum_lqg.policies.estimators import CurrentEstimator, PredictorEstimator, TrueState
@@ -47,7 +48,10 @@ def design_lti_policy(plant: LTIPlant, name: str, *, u_max: float | None = None)
             obs = design.dluenberger(Phi, C, default_observer_z(plant, K), form="current")
         est = CurrentEstimator(Phi, Gamma, C, obs.L)
         info["L"], info["observer_poles"] = obs.L, obs.poles
-    return Policy(K=K, estimator=est, u_max=plant.force_limit if u_max is None else float(u_max),
+    m = plant.n_inputs
+    limit = plant.limits_per_input if u_max is None else np.broadcast_to(
+        np.asarray(u_max, dtype=float), (m,)).copy()
+    return Policy(K=K, estimator=est, u_max=float(limit[0]) if m == 1 else limit,
                   name=name,
                   x_hat0=np.zeros(n), info=info)
 

@@ -67,8 +67,9 @@ def regular_target(where: str, path: Path, *, what: str = "file") -> Path:
     return target
 
 
-def atomic_write(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` so that ``path`` is never half-written and nothing is left behind.
+def atomic_write(path: Path, text: str | bytes) -> None:
+    """Write ``text`` (or bytes: a picture) to ``path`` so that ``path`` is never half-written and
+    nothing is left behind.
 
     The text goes to a new temporary file beside ``path`` (created exclusively), is flushed and
     fsynced, and replaces ``path`` with ``os.replace``; the folder is fsynced after the rename so
@@ -79,10 +80,16 @@ def atomic_write(path: Path, text: str) -> None:
     tmp = target.with_name(f".{target.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
     try:
-        with open(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
+        if isinstance(text, bytes):
+            with open(fd, "wb") as fb:
+                fb.write(text)
+                fb.flush()
+                os.fsync(fb.fileno())
+        else:
+            with open(fd, "w", encoding="utf-8", newline="") as fh:
+                fh.write(text)
+                fh.flush()
+                os.fsync(fh.fileno())
         os.replace(tmp, target)
     except BaseException:
         tmp.unlink(missing_ok=True)
