@@ -39,15 +39,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     name = (args.policy if args.policy is not None   # --policy '' is refused, not the default
             else f"{args.controller or 'dlqr'}+{args.observer or 'kalman'}")
     if args.lti is not None:                     # a plant given as matrices, the same loop
-        from pendulum_lqg.cli.lti import lti_report, lti_run_setup
-
-        lti, lti_sc, lti_policy, lti_config = lti_run_setup(args, name)
-        _check_plot_args(args)
-        with _watchdog(args):
-            lti_res = _run_in_batches(lti, lti_sc, lti_policy, args, trajectory=False)
-        if args.plot is not None:
-            _plot_episode(lti, lti_sc, lti_policy, args, None)
-        return lti_report(args, lti_config, lti_sc, lti_res.rows)
+        return _run_lti(args, name)
     plant = load_plant(args.model)
     scenario = scenario_from_args(args)
     plugin = is_plugin_ref(name)
@@ -91,6 +83,20 @@ def cmd_run(args: argparse.Namespace) -> int:
     else:
         _print_summary(policy.name, config, summary)
     return 0
+
+
+def _run_lti(args: argparse.Namespace, name: str) -> int:
+    """``run --lti FILE``: the policy ``name`` on a plant given as matrices, through the same
+    loop, its summary and, with ``--plot``, the picture of one episode."""
+    from pendulum_lqg.cli.lti import lti_report, lti_run_setup
+
+    plant, scenario, policy, config = lti_run_setup(args, name)
+    _check_plot_args(args)
+    with _watchdog(args):
+        res = _run_in_batches(plant, scenario, policy, args, trajectory=False)
+    if args.plot is not None:
+        _plot_episode(plant, scenario, policy, args, None)
+    return lti_report(args, config, scenario, res.rows)
 
 
 def _watchdog(args: argparse.Namespace) -> Any:

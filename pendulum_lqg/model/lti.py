@@ -6,7 +6,7 @@ and Ogata's discrete example are files in ``experiments/lti/``, read by
 :func:`load_lti` from TOML or ``.npz``. An :class:`LTIPlant` carries its own noise (the density W
 of w, the per-sample covariance V of v), cost weights and input limits; its designs, scenario and
 stationary closed loop are :mod:`pendulum_lqg.policies.lti`'s. A ``control.StateSpace`` becomes one
-through :func:`pendulum_lqg.model.control_io.from_statespace`.
+through :func:`pendulum_lqg.policies.control_io.from_statespace`.
 
 A TOML file::
 

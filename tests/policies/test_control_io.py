@@ -1,4 +1,4 @@
-"""python-control in and out (:mod:`pendulum_lqg.model.control_io`): a plant from a
+"""python-control in and out (:mod:`pendulum_lqg.policies.control_io`): a plant from a
 ``control.StateSpace``, its designs checked against python-control's own ``lqr``, ``dlqr``,
 ``lqe``, ``dlqe`` on random plants, and the compensator closed on the plant with
 ``control.feedback`` giving the loop eigenvalues ``design --lti`` reports."""
@@ -13,7 +13,8 @@ import pytest
 
 from pendulum_lqg import design
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.model.control_io import (
+from pendulum_lqg.model.lti import load_lti
+from pendulum_lqg.policies.control_io import (
     closed_loop,
     compensator,
     continuous_compensator,
@@ -21,7 +22,6 @@ from pendulum_lqg.model.control_io import (
     plant_statespace,
     sorted_poles,
 )
-from pendulum_lqg.model.lti import load_lti
 from pendulum_lqg.policies.lti import design_lti_all
 
 EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments" / "lti"
