@@ -425,7 +425,7 @@ def lti_from_mapping(data: dict[str, Any], *, name: str = "lti", path: Path | No
                       "x0_std")
     text = {key: w.get(data, key, any_text, default="") for key in ("name", "description")}
     Phi, Gamma = design.zoh(M, Bm, T) if continuous else (M, Bm)
-    return LTIPlant(
+    plant = LTIPlant(
         name=text["name"] or name, description=text["description"],
         control_period=T, Phi=Phi, Gamma=Gamma, C=C, G=G, W=W, V=V, Q=Q, R=R, N=N,
         A=M if continuous else None, B=Bm if continuous else None,
@@ -439,6 +439,11 @@ def lti_from_mapping(data: dict[str, Any], *, name: str = "lti", path: Path | No
         x0=x0, path=path, x0_std=x0_std,
         state_limits=(_limits(w, "state_limits", data["state_limits"], n)
                       if "state_limits" in data else None))
+    shared = sorted(set(plant.state_names) & set(plant.input_names)) if m > 1 else []
+    if shared:              # several inputs' metrics are rms_NAME, as the states'
+        raise w.error(f"expected names other than the states', got {shared[0]!r} for both a "
+                      "state and an input", "inputs")
+    return plant
 
 
 def _positive(value: Any) -> float:

@@ -133,6 +133,14 @@ def test_other_bad_values_name_their_key(key, value, message):
         lti_from_mapping({**BASE, "Q": [[1.0, 0.0], [0.0, 0.0]], key: value})
 
 
+def test_an_input_named_as_a_state_is_refused():
+    two = {**BASE, "B": [[0.0, 1.0], [1.0, 0.0]], "R": 1.0}
+    with pytest.raises(ConfigError, match="inputs: expected names other than the states', got "
+                                          "'x1' for both"):
+        lti_from_mapping({**two, "inputs": ["x1", "f"]})
+    assert lti_from_mapping(two).input_names == ("u1", "u2")
+
+
 def test_a_fifo_is_refused_without_blocking(tmp_path, capsys):
     path = tmp_path / "fifo.toml"
     os.mkfifo(path)
