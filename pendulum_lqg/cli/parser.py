@@ -183,7 +183,8 @@ def _add_design_parser(sub: Any) -> None:
     p.add_argument("--lti", default=None, metavar="FILE",
                    help="a plant given as matrices (TOML or .npz, e.g. "
                         "experiments/lti/double_integrator.toml) instead of the cart-pole: its "
-                        "discretisation and every design on the file's weights and noise")
+                        "discretisation and every design on the file's weights and noise "
+                        "(default: the cart-pole)")
     p.add_argument("--json", action="store_true",
                    help="machine-readable output (matrices as nested lists, poles as [re, im])")
 
