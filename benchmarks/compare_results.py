@@ -11,10 +11,12 @@ max(|a|, |b|, 1e-12), so numbers that are zero up to rounding (1e-17 against 0) 
 
 from __future__ import annotations
 
-import argparse
 import csv
 import math
 from pathlib import Path
+
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.util.scripts import ScriptParser, run_script
 
 OUTCOMES = ("success", "failure_reason", "episode", "seed", "config")
 
@@ -29,9 +31,12 @@ def compare(a: Path, b: Path) -> int:
         if f.read_bytes() == g.read_bytes():
             print(f"{f.relative_to(a)}: byte-identical")
             continue
-        ra, rb = list(csv.DictReader(f.open())), list(csv.DictReader(g.open()))
-        worst, differ, total, outcomes = 0.0, 0, 0, 0
-        for x, y in zip(ra, rb, strict=True):
+        with f.open(newline="") as fa, g.open(newline="") as fb:
+            ra, rb = list(csv.DictReader(fa)), list(csv.DictReader(fb))
+        worst, differ, total, outcomes = 0.0, 0, 0, abs(len(ra) - len(rb))
+        if len(ra) != len(rb):
+            print(f"{f.relative_to(a)}: {len(ra)} rows here, {len(rb)} in {b}")
+        for x, y in zip(ra, rb, strict=False):
             for key, va in x.items():
                 vb = y.get(key)
                 if key in OUTCOMES:
@@ -52,13 +57,17 @@ def compare(a: Path, b: Path) -> int:
     return differing_outcomes
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("a", type=Path)
-    ap.add_argument("b", type=Path)
-    args = ap.parse_args()
-    raise SystemExit(1 if compare(args.a, args.b) else 0)
+def main(argv: list[str] | None = None) -> int:
+    ap = ScriptParser(description=__doc__.splitlines()[0])
+    ap.add_argument("a", type=Path, help="a results folder")
+    ap.add_argument("b", type=Path, help="the results folder to compare it with")
+    args = ap.parse_args(argv)
+    for name, folder in (("a", args.a), ("b", args.b)):
+        if not folder.is_dir():
+            raise ConfigError(f"{name}: expected a results folder, got {str(folder)!r} "
+                              f"({'not a folder' if folder.exists() else 'no such folder'})")
+    return 1 if compare(args.a, args.b) else 0
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

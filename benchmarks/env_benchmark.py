@@ -25,7 +25,6 @@ Usage::
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import gymnasium as gym
@@ -34,6 +33,10 @@ import numpy as np
 import pendulum_lqg
 from pendulum_lqg.bench.perf import raw_batch_rate, raw_rollout_rate
 from pendulum_lqg.envs.agent import LQGAgent
+from pendulum_lqg.util.scripts import ScriptParser, int_in, requires, run_script
+
+#: Ceilings of the options (env steps per env and round; rounds).
+MAX_STEPS, MAX_REPEATS = 10**7, 100
 
 
 class Runner:
@@ -88,13 +91,16 @@ def through_public_rollout(env: gym.Env) -> gym.Env:
     return env
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--steps", type=int, default=10000, help="env steps per env and round")
-    ap.add_argument("--blocks", type=int, default=20,
+def main(argv: list[str] | None = None) -> None:
+    ap = ScriptParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int_in(1, MAX_STEPS), default=10000,
+                    help="env steps per env and round")
+    ap.add_argument("--blocks", type=int_in(1, MAX_STEPS), default=20,
                     help="blocks per round, the envs alternating block by block")
-    ap.add_argument("--repeats", type=int, default=7, help="rounds")
-    args = ap.parse_args()
+    ap.add_argument("--repeats", type=int_in(1, MAX_REPEATS), default=7, help="rounds")
+    args = ap.parse_args(argv)
+    requires("imageio", needed_for="gymnasium's InvertedPendulum-v5 (the env compared with)",
+             install="imageio (in the dev group: uv sync; or pip install imageio)")
 
     ours = gym.make(pendulum_lqg.ENV_ID)
     k = ours.unwrapped.frame_skip
@@ -152,4 +158,4 @@ def main() -> None:
           f"ratios, {min(direct):.3f}–{max(direct):.3f}; the direct call is kept only if ≥ 1.03×)")
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

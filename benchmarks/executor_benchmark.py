@@ -11,7 +11,6 @@ units per second (median of the rounds) and Ray's start-up time. Needs the ``ray
 
 from __future__ import annotations
 
-import argparse
 import os
 import statistics
 import tempfile
@@ -21,14 +20,21 @@ from pathlib import Path
 from pendulum_lqg.bench.executors import LocalExecutor, RayExecutor
 from pendulum_lqg.bench.experiments import load_spec
 from pendulum_lqg.bench.sweep import run_sweep
+from pendulum_lqg.util.limits import MAX_SCORE_EPISODES
+from pendulum_lqg.util.scripts import ScriptParser, int_in, requires, run_script
+
+#: Ceiling of the alternating rounds.
+MAX_ROUNDS = 100
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def main(argv: list[str] | None = None) -> None:
+    ap = ScriptParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--experiment", default="mismatch")
-    ap.add_argument("--episodes", type=int, default=20)
-    ap.add_argument("--rounds", type=int, default=2)
-    args = ap.parse_args()
+    ap.add_argument("--episodes", type=int_in(1, MAX_SCORE_EPISODES), default=20,
+                    help="episodes per configuration")
+    ap.add_argument("--rounds", type=int_in(1, MAX_ROUNDS), default=2)
+    args = ap.parse_args(argv)
+    requires("ray", needed_for="the Ray executor", install="the ray extra: uv sync --extra ray")
     spec = load_spec(args.experiment).with_overrides(episodes=args.episodes)
     n_units = len(spec.units())
     cpus = len(os.sched_getaffinity(0))
@@ -61,4 +67,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -37,6 +37,10 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from pathlib import Path
+
+#: Ceiling of --steps (env or vector steps counted under Valgrind, about 50× slower than native).
+MAX_STEPS = 10**6
 
 
 def workload(kind: str, count: int, public: bool = False) -> None:
@@ -88,11 +92,32 @@ def workload(kind: str, count: int, public: bool = False) -> None:
     counting(False)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def inner(argv: list[str]) -> None:
+    """The workload inside Valgrind (``--inner``): it imports nothing of the package before the
+    workload does, so that ``--tree`` may name a checkout of any version."""
+    ap = argparse.ArgumentParser()
+    ap.add_argument("kind")
+    ap.add_argument("--steps", type=int)
+    ap.add_argument("--episodes", type=int, default=64)
+    ap.add_argument("--public", action="store_true")
+    ap.add_argument("--inner", action="store_true")
+    args = ap.parse_args(argv)
+    workload(args.kind, args.episodes if args.kind == "loop"
+             else args.steps or (1000 if args.kind == "env" else 100), args.public)
+
+
+def main(argv: list[str] | None = None) -> None:
+    from pendulum_lqg.errors import ConfigError
+    from pendulum_lqg.util.files import output_file, replacing
+    from pendulum_lqg.util.limits import MAX_BATCH_EPISODES
+    from pendulum_lqg.util.scripts import ScriptParser, int_in
+
+    ap = ScriptParser(description=__doc__.splitlines()[0])
     ap.add_argument("kind", choices=["env", "vector", "loop"])
-    ap.add_argument("--steps", type=int, default=None, help="env or vector steps (1000 / 100)")
-    ap.add_argument("--episodes", type=int, default=64, help="loop: episodes")
+    ap.add_argument("--steps", type=int_in(1, MAX_STEPS), default=None,
+                    help="env or vector steps (1000 / 100)")
+    ap.add_argument("--episodes", type=int_in(1, MAX_BATCH_EPISODES), default=64,
+                    help="loop: episodes")
     ap.add_argument("--tree", default=None, help="a checkout whose pendulum_lqg to run")
     ap.add_argument("--public", action="store_true",
                     help="env: the period through the public Batch.rollout, not DIRECT_CALL's "
@@ -100,27 +125,33 @@ def main() -> None:
     ap.add_argument("--out", default=None,
                     help="keep callgrind's profile in this file (for callgrind_annotate)")
     ap.add_argument("--inner", action="store_true", help=argparse.SUPPRESS)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     count = args.episodes if args.kind == "loop" else (args.steps or
                                                        (1000 if args.kind == "env" else 100))
-    if args.inner:
-        workload(args.kind, count, args.public)
-        return
+    out = None if args.out is None else output_file("--out", args.out, what="callgrind profile")
+    if args.tree and not (Path(args.tree) / "pendulum_lqg").is_dir():
+        raise ConfigError(f"--tree: expected a checkout holding pendulum_lqg/, got {args.tree!r}")
     if shutil.which("valgrind") is None:
-        sys.exit("instructions: valgrind is not on the PATH (apt-get install valgrind)")
+        raise ConfigError("instructions: valgrind is not on the PATH (apt-get install valgrind)")
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
     if args.tree:
         env["PYTHONPATH"] = os.path.abspath(args.tree)
     with tempfile.TemporaryDirectory() as tmp:
-        profile = os.path.abspath(args.out) if args.out else f"{tmp}/callgrind.out"
+        # callgrind writes its profile itself: into the temporary folder, then moved whole to --out
+        profile = f"{tmp}/callgrind.out"
         cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no",
                f"--callgrind-out-file={profile}", sys.executable, os.path.abspath(__file__),
                args.kind, "--inner", "--steps", str(count), "--episodes", str(count),
                *(["--public"] if args.public else [])]
         done = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
-    found = re.search(r"I\s+refs:\s+([\d,]+)", done.stderr)
-    if done.returncode != 0 or found is None:
-        sys.exit(f"instructions: the valgrind run failed:\n{done.stderr[-2000:]}")
+        found = re.search(r"I\s+refs:\s+([\d,]+)", done.stderr)
+        if done.returncode != 0 or found is None:
+            last = (done.stderr.strip().splitlines() or ["no output"])[-1]
+            raise ConfigError(f"instructions: the valgrind run failed (exit status "
+                              f"{done.returncode}): {last}")
+        if out is not None:
+            with replacing(out, where="--out", what="callgrind profile") as kept:
+                shutil.copyfile(profile, kept)
     total = int(found.group(1).replace(",", ""))
     what = {"env": "env.step", "vector": "vector step (64 envs, with the agent)",
             "loop": "episode (2 s, DLQR + Kalman, one thread)"}[args.kind]
@@ -130,4 +161,9 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    if "--inner" in sys.argv[1:]:
+        inner(sys.argv[1:])
+    else:
+        from pendulum_lqg.util.scripts import run_script
+
+        run_script(main)

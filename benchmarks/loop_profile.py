@@ -18,7 +18,6 @@ Usage::
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import time
 
@@ -30,14 +29,20 @@ from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.model.plant import load_plant, steps_per_period
 from pendulum_lqg.policies.lqg import DesignSpec, design_policy
+from pendulum_lqg.util.limits import MAX_BATCH_EPISODES
+from pendulum_lqg.util.scripts import ScriptParser, int_in, number, run_script
+
+#: Ceiling of the alternating rounds.
+MAX_ROUNDS = 100
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--episodes", type=int, default=512)
-    ap.add_argument("--duration", type=float, default=2.0)
-    ap.add_argument("--rounds", type=int, default=5)
-    args = ap.parse_args()
+def main(argv: list[str] | None = None) -> None:
+    ap = ScriptParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--episodes", type=int_in(1, MAX_BATCH_EPISODES), default=512)
+    ap.add_argument("--duration", type=number(positive=True), default=2.0,
+                    help="seconds per episode (the scenario's ceilings apply)")
+    ap.add_argument("--rounds", type=int_in(1, MAX_ROUNDS), default=5)
+    args = ap.parse_args(argv)
     plant = load_plant()
     m, n = plant.model, args.episodes
     sc = Scenario(duration=args.duration)
@@ -85,4 +90,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

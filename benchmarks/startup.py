@@ -21,7 +21,6 @@ shares, not seconds.
 
 from __future__ import annotations
 
-import argparse
 import os
 import statistics
 import subprocess
@@ -29,6 +28,11 @@ import sys
 import time
 from pathlib import Path
 
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.util.scripts import ScriptParser, int_in, run_script
+
+#: Ceiling of the alternating rounds.
+MAX_ROUNDS = 100
 #: The groups import time is charged to: the package's own modules and the libraries it calls
 #: (``scipy`` after its two subpackages: SciPy's common core, whichever subpackage loads it).
 GROUPS = ("pendulum_lqg", "scipy.signal", "scipy.linalg", "scipy", "mujoco", "numpy")
@@ -88,14 +92,13 @@ def wall(cmd: list[str]) -> float:
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--rounds", type=int, default=9, help="alternating rounds (default 9)")
+    ap = ScriptParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rounds", type=int_in(1, MAX_ROUNDS), default=9,
+                    help="alternating rounds (default 9)")
     args = ap.parse_args(argv)
-    if args.rounds < 1:
-        ap.error(f"--rounds: expected a positive integer, got {args.rounds}")
     script = Path(sys.executable).with_name("pendulum-lqg")
     if not script.exists():
-        sys.exit(f"startup: no console script at {script} (install the package: uv sync)")
+        raise ConfigError(f"startup: no console script at {script} (install the package: uv sync)")
     commands = {
         "python -c pass": [sys.executable, "-c", "pass"],
         f'python -c "{LIBRARIES}"': [sys.executable, "-c", LIBRARIES],
@@ -127,4 +130,4 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

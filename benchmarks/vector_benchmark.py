@@ -30,7 +30,6 @@ Usage::
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import gymnasium as gym
@@ -39,6 +38,11 @@ import numpy as np
 import pendulum_lqg
 from pendulum_lqg.bench.perf import faster_series, raw_batch_rate, raw_rollout_rate, rollout_chunk
 from pendulum_lqg.envs.agent import LQGAgent
+from pendulum_lqg.util.limits import MAX_NUM_ENVS
+from pendulum_lqg.util.scripts import ScriptParser, int_in, number, run_script
+
+#: Ceilings of the options (vector steps per contender and round; rounds; µs of a gap).
+MAX_STEPS, MAX_REPEATS, MAX_GAP_US = 10**7, 100, 10**6
 
 
 class Runner:
@@ -66,16 +70,17 @@ class Runner:
         return spent
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--num-envs", type=int, default=64)
-    ap.add_argument("--steps", type=int, default=600, help="vector steps per contender and round")
-    ap.add_argument("--blocks", type=int, default=20,
+def main(argv: list[str] | None = None) -> None:
+    ap = ScriptParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--num-envs", type=int_in(1, MAX_NUM_ENVS), default=64)
+    ap.add_argument("--steps", type=int_in(1, MAX_STEPS), default=600,
+                    help="vector steps per contender and round")
+    ap.add_argument("--blocks", type=int_in(1, MAX_STEPS), default=20,
                     help="blocks per round, the contenders taking turns block by block")
-    ap.add_argument("--repeats", type=int, default=5, help="rounds")
-    ap.add_argument("--gap", type=float, default=100.0,
+    ap.add_argument("--repeats", type=int_in(1, MAX_REPEATS), default=5, help="rounds")
+    ap.add_argument("--gap", type=number(minimum=0, maximum=MAX_GAP_US), default=100.0,
                     help="µs of Python before each call of the 'gaps' contender (default 100)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     n = args.num_envs
     native = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n)
     sync = gym.make_vec(pendulum_lqg.ENV_ID, num_envs=n, vectorization_mode="sync")
@@ -143,4 +148,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main)

@@ -132,18 +132,15 @@ def _inline_figure_class() -> type[Figure]:
 
 
 def save_episode_plot(fig: Figure, path: str | Path) -> Path:
-    """Write ``fig`` to ``path`` (``.png``, ``.svg`` or ``.pdf``, by the suffix); returns the path.
-    A suffix of another kind, or a path that exists and is not a regular file, is a
-    :class:`ConfigError` naming ``--plot``. The picture is drawn in memory and replaces the file
-    atomically (:func:`~pendulum_lqg.util.files.atomic_write`): a failed write leaves the old
-    picture whole."""
-    from pendulum_lqg.util.files import atomic_write
+    """Write ``fig`` to ``path`` (``.png``, ``.svg`` or ``.pdf``, by the suffix) under the output
+    rule (:func:`~pendulum_lqg.util.files.save_figure`: temporary file and rename); returns the
+    path. A suffix of another kind, or a path that exists and is not a regular file, is a
+    :class:`ConfigError` naming ``--plot``."""
+    from pendulum_lqg.util.files import save_figure
 
-    path = check_plot_path(path)
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=110, format=path.suffix.lower().lstrip("."))
-    atomic_write(path, buf.getvalue())
-    return path
+    # replaced whole or not at all: a failed write (a full disk, a file-size limit) keeps the old
+    # picture
+    return save_figure(fig, check_plot_path(path), where="--plot", what="picture", dpi=110)
 
 
 def check_plot_path(path: str | Path) -> Path:

@@ -20,6 +20,7 @@ from pendulum_lqg.analysis.reading import (
 )
 from pendulum_lqg.core.metrics import mean_se, wilson_interval
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.util.files import save_figure
 
 SWEEP_KEYS = ("noise_scale", "control_period", "theta0", "pole_mass_scale", "pole_length_scale",
               "cart_mass_scale", "duration")
@@ -391,7 +392,8 @@ def _mismatch_figures(rows: list[dict[str, Any]], out: Path, name: str, series: 
     fig.subplots_adjust(top=0.9, wspace=0.45, hspace=0.4)
     fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label="success rate")
     fig.suptitle(f"{name}: success over pole mass × length")
-    fig.savefig(out / f"{name}_success_grid.png", bbox_inches="tight")
+    save_figure(fig, out / f"{name}_success_grid.png", where="report", what="figure",
+                bbox_inches="tight")
     figs.append(("success over pole mass × length", f"{name}_success_grid.png"))
     return figs
 

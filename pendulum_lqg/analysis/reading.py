@@ -97,8 +97,11 @@ class Figures:
 
 
 def save(fig: Any, out: Path, fname: str) -> str:
+    """Write ``fig`` to ``out/fname`` under the output rule (replaced whole or not at all)."""
+    from pendulum_lqg.util.files import save_figure
+
     fig.tight_layout()
-    fig.savefig(out / fname, bbox_inches="tight")
+    save_figure(fig, out / fname, where="report", what="figure", bbox_inches="tight")
     return fname
 
 

@@ -86,7 +86,7 @@ SENSING_KEYS = ("measurement_delay", "actuator_delay", "dropout", "actuator_tau"
 DELAY_KINDS = ("measurement", "actuator")
 SCENARIO_KEYS = ("control_period", "duration", "x0", "x0_std", "estimate0", "theta_max",
                  "track_limit", "force_limit", "settle_band", "cost_Q", "cost_R", *SENSING_KEYS,
-                 "randomize", "plant")
+                 "randomize", "plant", "burn_in")
 NOISE_KEYS = tuple(f.name for f in dataclasses.fields(NoiseModel))
 DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
 MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))
@@ -425,6 +425,7 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     from: the experiment file's own folder (then the current folder).
     """
     from pendulum_lqg.bench.lti import check_lti_experiment, lti_file
+    from pendulum_lqg.util.limits import MAX_BATCH_EPISODES, check_at_most
 
     base = _checked_tables(data)
     grid = _checked_grid(data.get("grid", {}))
@@ -435,7 +436,8 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
         check_lti_experiment(data)
     episodes = _as_int("episodes", data.get("episodes", 100), 1)
     seed = _as_int("seed", data.get("seed", 0), 0)
-    chunk = _as_int("chunk", data.get("chunk", 250), 1)
+    chunk = check_at_most("chunk", _as_int("chunk", data.get("chunk", 250), 1),
+                          MAX_BATCH_EPISODES, "episodes per work unit, one batch of run_episodes")
     configs = _configurations(grid, base, episodes, base_dir, model_file=model_file, lti=lti)
     return ExperimentSpec(name=str(data.get("name", name)), description=str(
         data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,

@@ -29,7 +29,7 @@ from pendulum_lqg.errors import ConfigError
 #: What an experiment on an LTI plant may set, per table (the file holds the rest).
 LTI_TABLE_KEYS: dict[str, tuple[str, ...]] = {
     "scenario": ("duration", "estimate0", "force_limit", "measurement_delay", "actuator_delay",
-                 "dropout"),
+                 "dropout", "burn_in"),
     "noise": ("scale",),
     "design": ("controller", "observer"),
     "model": (),
@@ -128,7 +128,8 @@ def lti_theory_entry(cfg: Any) -> dict[str, Any] | None:
     name = f"{spec.controller}+{spec.observer}"
     plant = lti_plant(cfg.lti_file)
     res = lti_theory(plant, (name,), noise_scale=scenario.noise.scale,
-                     duration=scenario.duration)[name]
+                     duration=scenario.duration, estimate0=scenario.estimate0,
+                     burn_in=scenario.burn_in)[name]
     out: dict[str, Any] = {"plant": f"lti:{plant.name}", "spectral_radius": res.spectral_radius,
                            "stable": res.stable}
     for s in plant.state_names:
@@ -137,4 +138,9 @@ def lti_theory_entry(cfg: Any) -> dict[str, Any] | None:
     if plant.n_inputs == 1:             # the theory's u_std is one input's
         out["rms_u"] = res.u_std
     out.update(cost_rate=res.cost_rate, cost_J=res.cost_J, verdict=res.verdict)
+    ep = res.episode                 # expected over the episode from x₀, x̂₀ (after the burn-in)
+    out["episode"] = {**{f"rms_{s}": v for s, v in ep.rms.items()},
+                      **({"rms_u": ep.u_rms} if plant.n_inputs == 1 else {}),
+                      **{f"rms_est_err_{s}": v for s, v in ep.estimate_error_rms.items()},
+                      "cost_J": ep.cost_J, "burn_in": ep.burn_in}
     return out

@@ -308,7 +308,10 @@ def config_theory(cfg: Configuration) -> dict[str, Any] | None:
     """The closed-form stationary loop of a configuration (:func:`~pendulum_lqg.policies.theory.
     policy_theory`, on the linearisation of the simulated plant: its own linear plant, or the
     exact ZOH for MuJoCo), as the summary's ``theory`` entry; ``None`` for what the theory does
-    not model (plugins, delays, dropout, lags, force noise, randomised plants)."""
+    not model (plugins, delays, dropout, lags, force noise, randomised plants). Its ``episode``
+    holds the expected RMS over one episode from the configuration's x₀ and x̂₀ (after its
+    ``burn_in``) and the expected J, in the Monte Carlo's column names (summary.json only: the
+    Markdown table keeps its stationary columns)."""
     from pendulum_lqg.policies.loading import build_policy
     from pendulum_lqg.policies.theory import policy_theory
 
@@ -325,11 +328,16 @@ def config_theory(cfg: Configuration) -> dict[str, Any] | None:
         res = policy_theory(simulated, scenario, policy)
     except PendulumLQGError:
         return None
+    ep = res.episode
+    episode = None if ep is None else {
+        "rms_theta": ep.rms["theta"], "rms_p": ep.rms["p"], "rms_u": ep.u_rms,
+        **{f"rms_est_err_{s}": v for s, v in ep.estimate_error_rms.items()},
+        "cost_J": ep.cost_J, "burn_in": ep.burn_in}
     return {"plant": res.plant, "spectral_radius": res.spectral_radius, "stable": res.stable,
             "rms_theta": res.rms["theta"], "rms_p": res.rms["p"], "rms_u": res.u_std,
             "rms_est_err_theta": res.estimate_error_std["theta"],
             "rms_est_err_p_dot": res.estimate_error_std["p_dot"], "cost_rate": res.cost_rate,
-            "cost_J": res.cost_J, "verdict": res.verdict}
+            "cost_J": res.cost_J, "verdict": res.verdict, "episode": episode}
 
 
 def _stat_cell(stat: dict[str, float], digits: int = 3) -> str:

@@ -39,6 +39,9 @@ MAX_FRAME_STACK = 10_000
 #: The estimators an observation design may show instead of ``y``
 #: (:mod:`pendulum_lqg.scoreboard.obs_design`).
 ESTIMATORS = ("kalman",)
+#: What a suite's reference and built-in designs are designed on (a score file's ``designed_on``;
+#: the rule: :func:`pendulum_lqg.scoreboard.suites.designed_on`).
+DESIGNED_ON = ("plant played", "nominal MJCF", "nominal MJCF + model_overrides")
 
 _RATE = number(low=0.0, high=1.0)
 _COST = number(nullable=True)
@@ -62,7 +65,9 @@ def score_suite(where: Where, data: Any) -> dict[str, Any]:
     data = where.check(data, table)
     out = {"applicable": where.get(data, "applicable", boolean, default=True),
            "fingerprint": where.get(data, "fingerprint", text),
-           "episodes": where.get(data, "episodes", integer(1))}
+           "episodes": where.get(data, "episodes", integer(1)),
+           # absent from the files written before the suites said it
+           "designed_on": where.get(data, "designed_on", one_of(DESIGNED_ON), default=None)}
     if not out["applicable"]:
         out["reason"] = where.get(data, "reason", any_text, default="")
         return out
@@ -199,7 +204,6 @@ def unit_record(path: str | os.PathLike[str]) -> dict[str, Any]:
     return out
 
 
-__all__ = ["ALGORITHMS", "ESTIMATORS", "LINEAR_FORMAT", "LINEAR_INPUTS", "LINEAR_VERSION",
-           "MAX_FRAME_STACK", "MAX_LINEAR_STATES", "SCORE_VERSION", "linear_controller", "score_file",
-           "score_suite",
-           "training_record", "unit_record"]
+__all__ = ["ALGORITHMS", "DESIGNED_ON", "ESTIMATORS", "LINEAR_FORMAT", "LINEAR_INPUTS",
+           "LINEAR_VERSION", "MAX_FRAME_STACK", "MAX_LINEAR_STATES", "SCORE_VERSION",
+           "linear_controller", "score_file", "score_suite", "training_record", "unit_record"]

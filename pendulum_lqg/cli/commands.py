@@ -8,7 +8,7 @@ import sys
 from typing import Any
 
 from pendulum_lqg.cli.parser import DEFAULT_RECORDING, cfg_error, jsonable, noise_from_args, spec_from_args
-from pendulum_lqg.cli.theory import limit_fields
+from pendulum_lqg.cli.theory import limit_fields, run_theory_lines
 
 
 # ---- run -----------------------------------------------------------------------------------------
@@ -25,7 +25,7 @@ def scenario_from_args(args: argparse.Namespace) -> Any:
                     actuator_delay=args.actuator_delay, dropout=args.dropout,
                     actuator_tau=args.actuator_tau,
                     randomize=Randomization.from_mapping(_randomize(args.randomize)),
-                    **limit_fields(args))
+                    burn_in=args.burn_in, **limit_fields(args))
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -61,9 +61,10 @@ def cmd_run(args: argparse.Namespace) -> int:
               "design": None if plugin else _dataclass_dict(spec), "model": str(plant.path)}
     from pendulum_lqg.version import SCHEMA_VERSION
 
-    out = {"schema_version": SCHEMA_VERSION, "config": config,
-           "success_rate": summary["success_rate"],
-           "success_ci95": summary["success_ci95"], "summary": summary, "episodes": res.rows}
+    theory, theory_lines = run_theory_lines(plant, scenario, policy)
+    out = {"schema_version": SCHEMA_VERSION, "config": config, "success_rate":
+           summary["success_rate"], "success_ci95": summary["success_ci95"], "summary": summary,
+           "theory": theory, "episodes": res.rows}
     if recording:
         from pendulum_lqg.record import record_episodes
 
@@ -81,22 +82,23 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(jsonable(out), indent=2))
     else:
-        _print_summary(policy.name, config, summary)
+        _print_summary(policy.name, config, summary, theory_lines)
     return 0
 
 
 def _run_lti(args: argparse.Namespace, name: str) -> int:
-    """``run --lti FILE``: the policy ``name`` on a plant given as matrices, through the same
-    loop, its summary and, with ``--plot``, the picture of one episode."""
+    """``run --lti FILE``: the episodes of policy ``name`` on the file's plant, and the theory;
+    with ``--plot``, the picture of one episode."""
     from pendulum_lqg.cli.lti import lti_report, lti_run_setup
 
-    plant, scenario, policy, config = lti_run_setup(args, name)
+    lti, lti_sc, lti_policy, lti_config = lti_run_setup(args, name)
     _check_plot_args(args)
     with _watchdog(args):
-        res = _run_in_batches(plant, scenario, policy, args, trajectory=False)
+        lti_res = _run_in_batches(lti, lti_sc, lti_policy, args, trajectory=False)
     if args.plot is not None:
-        _plot_episode(plant, scenario, policy, args, None)
-    return lti_report(args, config, scenario, res.rows)
+        _plot_episode(lti, lti_sc, lti_policy, args, None)
+    th = run_theory_lines(lti, lti_sc, lti_policy)
+    return lti_report(args, lti_config, lti_sc, lti_res.rows, theory=th)
 
 
 def _watchdog(args: argparse.Namespace) -> Any:
@@ -169,7 +171,8 @@ def _dataclass_dict(obj: Any) -> dict[str, Any]:
     return dataclasses.asdict(obj)
 
 
-def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None:
+def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any],
+                   theory_lines: list[str]) -> None:
     from rich.console import Console
     from rich.markup import escape
 
@@ -209,6 +212,7 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any]) -> None
     if sc["noise"]["scale"] != 0:
         con.print("settling time: not reported under noise (|θ| keeps leaving the "
                   f"{sc['settle_band']:g} rad band); run with --noise-scale 0 for it")
+    print("\n".join(theory_lines))
 
 
 def _run_in_batches(plant: Any, scenario: Any, policy: Any, args: argparse.Namespace, *,

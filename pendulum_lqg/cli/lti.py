@@ -31,7 +31,7 @@ _CARTPOLE_ONLY = {"model": (None, "the file is the plant"), "theta0": (defaults.
 #: The scenario fields an LTI plant runs with (the others describe the cart-pole; the file holds
 #: their counterparts, reported beside them in the configuration).
 _SCENARIO_FIELDS = ("control_period", "duration", "estimate0", "force_limit", "plant",
-                    "measurement_delay", "actuator_delay", "dropout")
+                    "measurement_delay", "actuator_delay", "dropout", "burn_in")
 
 
 def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, dict[str, Any]]:
@@ -52,7 +52,7 @@ def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, d
                             estimate0=args.estimate0, force_limit=args.force_limit,
                             measurement_delay=args.measurement_delay,
                             actuator_delay=args.actuator_delay, dropout=args.dropout,
-                            actuator_tau=args.actuator_tau)
+                            actuator_tau=args.actuator_tau, burn_in=args.burn_in)
     lay = layout(plant, scenario)
     u_max = limits(cast(Any, plant), scenario)[2]        # (the core types its plants as Plant)
     policy = design_lti_policy(plant, name, u_max=u_max)
@@ -69,8 +69,10 @@ def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, d
 
 
 def lti_report(args: argparse.Namespace, config: dict[str, Any], scenario: Any,
-               rows: list[dict[str, Any]]) -> int:
-    """Print the summary of ``run --lti``'s episode ``rows`` (``--json``: every row too)."""
+               rows: list[dict[str, Any]], *,
+               theory: tuple[dict[str, Any] | None, list[str]] = (None, [])) -> int:
+    """Print the summary of ``run --lti``'s episode ``rows`` (``--json``: every row too) and
+    ``theory`` (:func:`pendulum_lqg.cli.theory.run_theory_lines`)."""
     from pendulum_lqg.core.metrics import summarize, summary_metrics
     from pendulum_lqg.version import SCHEMA_VERSION
 
@@ -79,10 +81,11 @@ def lti_report(args: argparse.Namespace, config: dict[str, Any], scenario: Any,
     if args.json:
         out = {"schema_version": SCHEMA_VERSION, "config": config,
                "success_rate": summary["success_rate"], "success_ci95": summary["success_ci95"],
-               "summary": summary, "episodes": rows}
+               "summary": summary, "theory": theory[0], "episodes": rows}
         print(json.dumps(jsonable(out), indent=2))
     else:
         _print_summary(config, scenario, summary, fields)
+        print("\n".join(theory[1]))
     return 0
 
 

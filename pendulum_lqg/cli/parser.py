@@ -90,6 +90,22 @@ def _number(text: str) -> float:
     return v
 
 
+def _nonneg_number(text: str) -> float:
+    """argparse type: a finite number ≥ 0."""
+    v = _number(text)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, got {text!r}")
+    return v
+
+
+def _positive_number(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    v = _number(text)
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return v
+
+
 def _add_design_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("design")
     g.add_argument("--model", default=None, metavar="XML",
@@ -162,15 +178,31 @@ def add_theory_parser(sub: Any) -> None:
                         "experiments/lti/double_integrator.toml) instead of the cart-pole; "
                         "policies dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
                         "dlqr+none, dlqr+kalman, dlqr+luenberger)")
-    p.add_argument("--noise-scale", type=_number, default=1.0,
-                   help="multiplies both noises' standard deviations (default 1)")
-    p.add_argument("--duration", type=_number, default=defaults.DURATION,
-                   help=f"episode length in s for the implied J (default {defaults.DURATION:g})")
+    p.add_argument("--noise-scale", type=_nonneg_number, default=1.0,
+                   help="multiplies both noises' standard deviations, at most 10¹² (default 1)")
+    p.add_argument("--duration", type=_positive_number, default=defaults.DURATION,
+                   help=f"episode length in s for the implied J and the episode's expected RMS "
+                        f"(default {defaults.DURATION:g})")
+    p.add_argument("--theta0", type=_number, default=defaults.X0[1],
+                   help=f"initial pole angle in rad of the episode the expected RMS is taken over "
+                        f"(default {defaults.X0[1]:g}, as run; not with --lti: the file's x0)")
+    p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
+                   help="initial estimate of that episode: x̂₀ = 0 or the true x₀ (default zero)")
+    add_burn_in_option(p)
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: policies.NAME.{spectral_radius, stable, std, "
-                        "u_std, estimate_error_std, cost_rate, …}")
+                        "u_std, estimate_error_std, cost_rate, episode.{rms, u_rms, "
+                        "estimate_error_rms, cost_J}, …}")
     add_limit_options(p)
     _add_design_options(p)
+
+
+def add_burn_in_option(p: argparse.ArgumentParser) -> None:
+    """``--burn-in SECONDS``: the start of each episode left out of the RMS metrics."""
+    p.add_argument("--burn-in", type=_nonneg_number, default=0.0, metavar="SECONDS",
+                   help="leave the first SECONDS of each episode (whole control periods) out of "
+                        "the RMS metrics and of the theory's expected RMS; J, maxima and "
+                        "settling time keep the whole episode (default 0)")
 
 
 def _add_design_parser(sub: Any) -> None:
@@ -218,6 +250,7 @@ def _add_run_parser(sub: Any) -> None:
                    help=f"initial pole angle in rad, e.g. --theta0 -0.1 (default {defaults.X0[1]:g})")
     p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
                    help="initial estimate: x̂₀ = 0 or the true x₀ (default zero)")
+    add_burn_in_option(p)
     p.add_argument("--plant", choices=PLANTS, default="mujoco",
                    help="the simulated plant: MuJoCo, or the model's linearisation discretised "
                         "exactly (linear-zoh) or by the lecture's forward Euler at the control "

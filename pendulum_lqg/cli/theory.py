@@ -1,6 +1,7 @@
-"""``pendulum-lqg theory``: the stationary closed loop of built-in linear policies, in closed form
-(:mod:`pendulum_lqg.policies.theory`); the Scenario fields of the limit options ``run`` shares
-(the grammar of both is in :mod:`pendulum_lqg.cli.parser`)."""
+"""``pendulum-lqg theory``: the closed loop of built-in linear policies, in closed form
+(:mod:`pendulum_lqg.policies.theory`): stationary, and expected over one episode from its start;
+the Scenario fields of the limit options ``run`` shares (the grammar of both is in
+:mod:`pendulum_lqg.cli.parser`), and the theory lines of ``run``'s summary."""
 
 from __future__ import annotations
 
@@ -8,6 +9,22 @@ import argparse
 import json
 import math
 from typing import Any
+
+from pendulum_lqg.core import defaults
+
+#: Options of ``theory`` that describe the cart-pole; with ``--lti`` the file says them instead
+#: (their value when not given, and what the file holds in their place).
+_CARTPOLE_ONLY = {"model": (None, "the file is the plant"),
+                  "plant": ("linear-zoh", "the file's exact sampled model is the plant"),
+                  "dt": (defaults.CONTROL_PERIOD, "the file's control_period"),
+                  "theta0": (defaults.X0[1], "the file's x0"),
+                  "q": (None, "the file's Q"), "r": (None, "the file's R"),
+                  "w": (None, "the file's W"), "v": (None, "the file's V"),
+                  "observer_poles": (None, "the file's observer_poles"),
+                  "process_noise": ("state", "the file's G and W"),
+                  "theta_max": (defaults.THETA_MAX, "the file's state_limits"),
+                  "track_limit": (None, "the file's state_limits"),
+                  "force_limit": (None, "the file's force_limit")}
 
 
 def limit_fields(args: argparse.Namespace) -> dict[str, Any]:
@@ -27,7 +44,9 @@ def cmd_theory(args: argparse.Namespace) -> int:
         return _lti_theory(args)
     plant = load_plant(args.model)
     scenario = Scenario(control_period=args.dt, duration=args.duration, plant=args.plant,
-                        noise=noise_from_args(args, scale=args.noise_scale), **limit_fields(args))
+                        noise=noise_from_args(args, scale=args.noise_scale),
+                        x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0,
+                        burn_in=args.burn_in, **limit_fields(args))
     names = tuple(args.policies) or LECTURE_POLICIES
     results = lecture_theory(names, plant=plant, scenario=scenario, plant_kind=args.plant,
                              spec=spec_from_args(args))
@@ -39,6 +58,10 @@ def cmd_theory(args: argparse.Namespace) -> int:
     _print_table(results, f"theory — plant {scenario.plant}, T = {scenario.control_period:g} s, "
                           f"noise scale {scenario.noise.scale:g}, J over {scenario.duration:g} s; "
                           "stationary, limits off")
+    _print_episode_table(results, f"expected over an episode of {scenario.duration:g} s from "
+                                  f"x0 = {list(scenario.x0)}, x̂0 "
+                                  f"{'= x0' if scenario.estimate0 == 'true' else '= 0'}",
+                         scenario.burn_in)
     return 0
 
 
@@ -48,9 +71,11 @@ def _lti_theory(args: argparse.Namespace) -> int:
     from pendulum_lqg.model.lti import load_lti
     from pendulum_lqg.policies.lti import lti_theory
 
+    _check_lti_options(args)
     plant = load_lti(args.lti)
     names = tuple(args.policies) or ("dlqr+none", "dlqr+kalman", "dlqr+luenberger")
-    results = lti_theory(plant, names, noise_scale=args.noise_scale, duration=args.duration)
+    results = lti_theory(plant, names, noise_scale=args.noise_scale, duration=args.duration,
+                         estimate0=args.estimate0, burn_in=args.burn_in)
     if args.json:
         out = {"plant": plant.name, "lti": str(args.lti), "control_period": plant.control_period,
                "policies": {name: r.to_dict() for name, r in results.items()}}
@@ -59,7 +84,21 @@ def _lti_theory(args: argparse.Namespace) -> int:
     _print_table(results, f"theory — LTI plant {plant.name} ({args.lti}), T = "
                           f"{plant.control_period:g} s, noise scale {args.noise_scale:g}, "
                           f"J over {args.duration:g} s; stationary")
+    x0 = [0.0] * plant.n_states if plant.x0 is None else [float(v) for v in plant.x0]
+    _print_episode_table(results, f"expected over an episode of {args.duration:g} s from x0 = "
+                                  f"{x0}, x̂0 {'= x0' if args.estimate0 == 'true' else '= 0'}",
+                         args.burn_in)
     return 0
+
+
+def _check_lti_options(args: argparse.Namespace) -> None:
+    """Refuse, one line each, the cart-pole's options given with ``--lti``."""
+    from pendulum_lqg.cli.parser import cfg_error
+
+    for option, (default, why) in _CARTPOLE_ONLY.items():
+        if getattr(args, option) != default:
+            flag = "--" + option.replace("_", "-")
+            raise cfg_error(f"{flag}: not with --lti ({why})")
 
 
 def _print_table(results: dict[str, Any], header: str) -> None:
@@ -71,20 +110,91 @@ def _print_table(results: dict[str, Any], header: str) -> None:
     con.print(escape(header))
     t = Table()
     first = next(iter(results.values()))
-    a, b = first.state_names[:2]
+    shown = first.state_names[:2]                  # the first two states (one for a 1-state plant)
     unit = dict(zip(first.state_names, first.units, strict=True))
     t.add_column("policy", no_wrap=True)          # a policy's name is never cut
-    for col in ("radius", _head("std", a, unit[a]), _head("std", b, unit[b]), "std u",
-                _head("std error of", b, unit[b]), "J"):
+    for col in ("radius", *(_head("std", s, unit[s]) for s in shown), "std u",
+                _head("std error of", shown[-1], unit[shown[-1]]), "J"):
         t.add_column(escape(col))
     for name, r in results.items():
-        p, th = r.state_names[:2]
-        t.add_row(escape(name), f"{r.spectral_radius:.4f}", _cell(r.std[p]), _cell(r.std[th]),
-                  _cell(r.u_std), _cell(r.estimate_error_std[th]), _cell(r.cost_J))
+        t.add_row(escape(name), f"{r.spectral_radius:.4f}", *(_cell(r.std[s]) for s in shown),
+                  _cell(r.u_std), _cell(r.estimate_error_std[shown[-1]]), _cell(r.cost_J))
     con.print(t)
     con.print("every std and the cost rate: --json")
     for name, r in results.items():
         con.print(escape(f"{name}: {r.verdict}" + "".join(f" ({n})" for n in r.notes)))
+
+
+def _print_episode_table(results: dict[str, Any], header: str, burn_in: float) -> None:
+    """The expected RMS over the episode (``ClosedLoopTheory.episode``), in the table's layout:
+    what the simulated ``rms_*`` of a linear loop with the limits off average to (their squares)."""
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    con = Console(highlight=False)
+    first = next(iter(results.values()))
+    burn = f", RMS after {first.episode.burn_in:g} s" if burn_in else ""
+    con.print(escape(header + burn))
+    shown = first.state_names[:2]
+    unit = dict(zip(first.state_names, first.units, strict=True))
+    t = Table()
+    t.add_column("policy", no_wrap=True)
+    for col in (*(_head("RMS", s, unit[s]) for s in shown), "RMS u",
+                _head("RMS error of", shown[-1], unit[shown[-1]]), "E[J]"):
+        t.add_column(escape(col))
+    for name, r in results.items():
+        ep = r.episode
+        t.add_row(escape(name), *(_cell(ep.rms[s]) for s in shown), _cell(ep.u_rms),
+                  _cell(ep.estimate_error_rms[shown[-1]]), _cell(ep.cost_J))
+    con.print(t)
+
+
+def run_theory_lines(plant: Any, scenario: Any, policy: Any) -> tuple[dict[str, Any] | None,
+                                                                      list[str]]:
+    """The theory beside ``run``'s Monte Carlo: the closed loop of ``policy`` on the linear model
+    of ``plant`` (the linearisation for the cart-pole, the file's model for an LTI plant) with the
+    limits off, as ``(to_dict() or None, lines to print)``; a loop the theory does not model
+    (plug-ins, delays, dropout, lags, force noise) gives ``None`` and one line saying why."""
+    from pendulum_lqg.errors import PendulumLQGError
+    from pendulum_lqg.policies.theory import policy_theory
+
+    if getattr(policy, "K", None) is None or getattr(policy, "estimator", None) is None:
+        return None, ["theory: not for this loop (a plug-in policy; the theory takes the "
+                      "built-in linear ones)"]
+    if not scenario.randomize.is_empty():
+        return None, ["theory: not for this loop (randomised plants)"]
+    try:
+        if getattr(plant, "is_lti", False):
+            from pendulum_lqg.policies.lti import lti_theory
+
+            name = str(policy.name)
+            for field in ("measurement_delay", "actuator_delay", "dropout"):
+                if getattr(scenario, field):
+                    raise PendulumLQGError(f"{field}: the theory covers the plain sampled loop")
+            res = lti_theory(plant, (name,), noise_scale=scenario.noise.scale,
+                             duration=scenario.n_periods * scenario.control_period,
+                             estimate0=scenario.estimate0, burn_in=scenario.burn_in)[name]
+        else:
+            res = policy_theory(plant, scenario, policy)
+    except PendulumLQGError as exc:
+        return None, [f"theory: not for this loop ({exc})"]
+    ep = res.episode
+    after = f" after {ep.burn_in:g} s" if ep.skip else ""
+    names = res.state_names
+    lines = [f"theory ({res.plant} loop, limits off), expected RMS over the episode{after}: "
+             + _values(names, ep.rms, ep.u_rms, ep.estimate_error_rms),
+             "theory, stationary std: " + _values(names, res.std, res.u_std,
+                                                   res.estimate_error_std)]
+    return res.to_dict(), lines
+
+
+def _values(names: tuple[str, ...], x: dict[str, float], u: float, err: dict[str, float]) -> str:
+    """``p 0.1, θ 0.02, …, u 0.3; error p 0.01, …`` with 4 significant digits."""
+    label = {"theta": "θ", "p_dot": "ṗ", "theta_dot": "θ̇"}
+    states = ", ".join(f"{label.get(s, s)} {x[s]:.4g}" for s in names)
+    errors = ", ".join(f"{label.get(s, s)} {err[s]:.4g}" for s in names)
+    return f"{states}, u {u:.4g}; estimate error {errors}"
 
 
 def _head(what: str, name: str, unit: str) -> str:

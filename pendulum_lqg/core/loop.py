@@ -210,8 +210,8 @@ class Simulator:
             self.noise.reset(generators, horizon=self.n_periods if private_generators else None)
             if self._streamed:
                 self.metrics = MetricsAccumulator(
-                    self.ids.max(initial=-1) + 1, h=self.h, k=self.k, weights=self.weights,
-                    u_max=self.u_limit, settle_band=sc.settle_band, layout=lay)
+                    self.ids.max(initial=-1) + 1, h=self.h, k=self.k, weights=self.weights, u_max=
+                    self.u_limit, settle_band=sc.settle_band, layout=lay, skip=sc.burn_in_periods)
             self._proc_noise = np.zeros((n, self.noise.n_proc))     # w of the period, per row
         else:
             rows = np.asarray(rows)

@@ -11,6 +11,11 @@ including the step in which the episode failed):
 * ``settling_time`` — the last time ``|θ|`` was above the scenario's ``settle_band`` (0 if never);
 * ``time_to_failure`` — time of the first failing physics step (``nan`` for a success).
 
+With a burn-in (``Scenario.burn_in``, ``skip`` whole control periods), the RMS metrics —
+``rms_*``, ``rms_u`` and ``rms_est_err_*`` — take only the periods from ``skip`` on (their
+integrals and their alive time); the cost, the maxima, the saturated fraction and the settling
+time take the whole episode. Without one (the default) every sum is the one it always was.
+
 These are the cart-pole's columns (:data:`EPISODE_FIELDS`). An LTI plant's
 (:mod:`~pendulum_lqg.core.layout`) are named after its file's states: ``rms_NAME`` and
 ``max_abs_NAME`` of every state, ``rms_est_err_NAME``, and no settling time (it has no pole
@@ -88,12 +93,14 @@ class MetricsAccumulator:
     u_max : actuator limit [N] (the saturated-time metric)
     settle_band : the ``|θ|`` band of the settling time [rad]
     layout : the plant's :class:`~pendulum_lqg.core.layout.Layout` (default: the cart-pole's)
+    skip : control periods at the start of each episode left out of the RMS metrics (the
+        burn-in; module docstring)
 
     ``ids`` given to :meth:`accumulate` may be an integer array or a ``slice`` (the batch's rows
     are episodes ``start … stop−1`` in order: in-place sums, no gather and scatter).
     """
 
-    _SUMS = ("alive", "cost", "u2", "sat", "n_est", "settle", "max_u", "fail_time")
+    _SUMS = ("alive", "cost", "u2", "sat", "n_est", "settle", "max_u", "fail_time", "rms_alive")
     _ROWS = ("sq", "peak", "est2")
     # the running sums (one entry per episode id), made by _alloc from _SUMS; per reported state
     # column c (the layout's first ``m``): sq[:, c] = ∫ x_c² dt, peak[:, c] = max |x_c|
@@ -105,12 +112,16 @@ class MetricsAccumulator:
     settle: np.ndarray
     max_u: np.ndarray
     fail_time: np.ndarray
+    rms_alive: np.ndarray           # the alive time after the burn-in (used only with one)
 
     def __init__(self, n: int, *, h: float, k: int, weights: np.ndarray, u_max: float | np.ndarray,
-                 settle_band: float, layout: Layout | None = None) -> None:
+                 settle_band: float, layout: Layout | None = None, skip: int = 0) -> None:
         from pendulum_lqg.core.layout import CARTPOLE
 
         self.h, self.k = h, k
+        # a period enters the RMS sums when its start time t ≥ (skip − ½)·T: t is a running
+        # float sum of T, so half a period of margin decides exactly the periods n ≥ skip
+        self.skip_time = (skip - 0.5) * k * h if skip > 0 else 0.0
         self.weights, self.u_max = weights, u_max
         self.band = settle_band
         lay = CARTPOLE if layout is None else layout
@@ -168,15 +179,22 @@ class MetricsAccumulator:
         z, t_alive, cost = period_integrals(z, fail_step, h=h, weights=self.weights)
         _update(ids, self.cost, np.add, cost)
         _update(ids, self.alive, np.add, t_alive)
+        # after the burn-in (1.0 for every row without one: the sums below are then unchanged)
+        keep = (t >= self.skip_time).astype(float) if self.skip_time else None
+        if keep is not None:
+            _update(ids, self.rms_alive, np.add, keep * t_alive)
         for c in self.order:                       # ∫ x_c² dt, column by column (the same sums)
             col = z[:, :, c]
-            _update(ids, self.sq[:, c], np.add, h * np.einsum("nk,nk->n", col, col))
+            sq = h * np.einsum("nk,nk->n", col, col)
+            _update(ids, self.sq[:, c], np.add, sq if keep is None else keep * sq)
         if u.ndim == 1:
-            _update(ids, self.u2, np.add, u * u * t_alive)
+            u2 = u * u * t_alive
+            _update(ids, self.u2, np.add, u2 if keep is None else keep * u2)
             _update(ids, self.sat, np.add, (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive)
         else:                                      # (n, m): saturated when any input is
             alive = np.asarray(t_alive)
-            _update(ids, self.u2, np.add, u * u * (alive[:, None] if alive.ndim else alive))
+            u2 = u * u * (alive[:, None] if alive.ndim else alive)
+            _update(ids, self.u2, np.add, u2 if keep is None else keep[:, None] * u2)
             _update(ids, self.sat, np.add,
                     np.any(np.abs(u) >= self.u_max * (1 - 1e-12), axis=1) * t_alive)
         # |x_c| as (m, k, n), each component one contiguous block: the row maxima are then
@@ -193,8 +211,8 @@ class MetricsAccumulator:
             err = x_hat - x_start
             with np.errstate(over="ignore", invalid="ignore"):     # a diverged row: inf is honest
                 np.multiply(err, err, out=err)
-                _update(ids, self.est2, np.add, err)
-            _update(ids, self.n_est, np.add, 1.0)
+                _update(ids, self.est2, np.add, err if keep is None else keep[:, None] * err)
+            _update(ids, self.n_est, np.add, 1.0 if keep is None else keep)
         if fail_step is not None:
             f = self._index(ids)[failed]
             if x_fail is not None:          # the crossing sample (nan of a diverged row ignored)
@@ -232,16 +250,18 @@ class MetricsAccumulator:
         ids = np.asarray(ids, dtype=np.int64)
         raw_alive = self.alive[ids]
         alive = np.where(raw_alive > 0, raw_alive, np.nan)
+        rms_time = self.rms_alive[ids] if self.skip_time else raw_alive
+        rms_alive = np.where(rms_time > 0, rms_time, np.nan) if self.skip_time else alive
         n_est = self.n_est[ids]
         columns: dict[str, list[Any]] = {}
         with np.errstate(divide="ignore", invalid="ignore"):
             est = np.sqrt(self.est2[ids] / n_est[:, None])
             for c, name in zip(self.order, self.names, strict=True):
-                columns[f"rms_{name}"] = np.sqrt(self.sq[ids, c] / alive).tolist()
+                columns[f"rms_{name}"] = np.sqrt(self.sq[ids, c] / rms_alive).tolist()
                 columns[f"max_abs_{name}"] = self.peak[ids, c].tolist()
             u2, max_u = self.u2[ids].reshape(ids.size, -1), self.max_u[ids].reshape(ids.size, -1)
             for j, name in enumerate(self.inputs):
-                columns[f"rms_{name}"] = np.sqrt(u2[:, j] / alive).tolist()
+                columns[f"rms_{name}"] = np.sqrt(u2[:, j] / rms_alive).tolist()
                 columns[f"max_abs_{name}"] = max_u[:, j].tolist()
             columns["saturated_fraction"] = (self.sat[ids] / alive).tolist()
         est[n_est <= 0] = np.nan

@@ -34,6 +34,7 @@ import numpy as np
 
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.util.config import config_vector
+from pendulum_lqg.util.limits import MAX_NOISE_SCALE
 
 #: Control periods of noise drawn at once per episode.
 CHUNK_PERIODS = 256
@@ -91,6 +92,9 @@ class NoiseModel:
             raise ConfigError(f"noise_scale: expected a number ≥ 0, got {self.scale!r}") from exc
         if not np.isfinite(scale) or scale < 0:
             raise ConfigError(f"noise_scale: expected a finite number ≥ 0, got {self.scale!r}")
+        if scale > MAX_NOISE_SCALE:
+            raise ConfigError(f"noise_scale: expected at most {MAX_NOISE_SCALE:g} (the "
+                              f"ceiling), got {self.scale!r}")
         object.__setattr__(self, "scale", scale)
 
     @classmethod

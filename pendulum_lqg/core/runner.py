@@ -31,6 +31,7 @@ from pendulum_lqg.core.seeding import episode_generators, episode_seeds
 from pendulum_lqg.core.trajectory import Trajectory, TrajectoryLog, estimator_snapshot
 from pendulum_lqg.errors import PendulumLQGError
 from pendulum_lqg.model.plant import Plant
+from pendulum_lqg.util.limits import check_episodes
 
 
 @dataclass
@@ -130,14 +131,18 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: PolicyProtocol, *, se
         optionally ``select(rows)``, ``needs_state``, ``x_hat`` (for the estimation-error metrics),
         ``estimator`` (for recordings) and ``independent_rows`` (see :func:`shard_count`);
         built-in policies and plugins alike
-    seed : the run's seed; episodes : episode numbers to run
+    seed : the run's seed
+    episodes : episode numbers to run (non-negative integers): at least one, at most
+        :data:`~pendulum_lqg.util.limits.MAX_BATCH_EPISODES` (100 000; with ``trajectory``
+        :data:`~pendulum_lqg.util.limits.MAX_RECORDED_EPISODES`, 1 000), counted before anything
+        is allocated — otherwise a one-line :class:`~pendulum_lqg.errors.ConfigError`
     backend, nthread : see :class:`Simulator` (with ``nthread ≥ 2`` a large batch is split into
         shards, :func:`shard_count`)
     trajectory : keep full trajectories (for recordings), not only the streamed metrics
     initial_states : optional (len(episodes), 4) initial states replacing the scenario's
         ``x0``/``x0_std`` draw (e.g. a region-of-attraction grid)
     """
-    episodes = [int(e) for e in episodes]
+    episodes = check_episodes(episodes, trajectory=trajectory)   # counted before anything is made
     nthread = thread_count(nthread)
     shards = shard_count(len(episodes), nthread, backend, policy)
     t0 = time.perf_counter()

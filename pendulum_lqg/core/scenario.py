@@ -63,6 +63,10 @@ class Scenario:
     randomize : per-episode parameter randomisation of the simulated plant
         (:class:`~pendulum_lqg.model.plant.Randomization`; a mapping such as
         ``{"pole_mass_scale": (0.8, 1.2)}`` is accepted)
+    burn_in : seconds at the start of an episode left out of the RMS metrics (``rms_*``,
+        ``rms_u``, ``rms_est_err_*``), rounded to whole control periods and shorter than the
+        episode; 0 (default) keeps every period. J, the maxima, the saturated fraction and the
+        settling time always take the whole episode
     """
 
     control_period: float = defaults.CONTROL_PERIOD
@@ -84,6 +88,7 @@ class Scenario:
     dropout: float = 0.0
     actuator_tau: float = 0.0
     randomize: Randomization = field(default_factory=Randomization)
+    burn_in: float = 0.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "control_period", check_control_period(self.control_period))
@@ -94,6 +99,7 @@ class Scenario:
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, positive_limit(name, getattr(self, name)))
         check_duration(self.duration, self.control_period)     # at most MAX_PERIODS periods
+        self._check_burn_in()
         object.__setattr__(self, "x0", config_vector("x0", self.x0, 4))
         object.__setattr__(self, "x0_std", config_vector("x0_std", self.x0_std, 4, nonneg=True))
         object.__setattr__(self, "cost_Q", config_vector("cost_Q", self.cost_Q, 4, nonneg=True))
@@ -137,6 +143,15 @@ class Scenario:
             raise ConfigError(f"dropout: expected a probability in [0, 1), got {self.dropout!r}")
         object.__setattr__(self, "randomize", Randomization.from_mapping(self.randomize))
 
+    def _check_burn_in(self) -> None:
+        object.__setattr__(self, "burn_in", check_burn_in(self.burn_in, self.control_period,
+                                                          self.duration))
+
+    @property
+    def burn_in_periods(self) -> int:
+        """The control periods the burn-in leaves out of the RMS metrics."""
+        return round(self.burn_in / self.control_period)
+
     @property
     def measurement_delay_periods(self) -> int:
         """The measurement delay in control periods."""
@@ -161,5 +176,19 @@ class Scenario:
         for name in ("theta_max", "track_limit", "force_limit"):   # a switched-off limit: "inf"
             if d[name] == float("inf"):                              # (JSON has no ∞; null is
                 d[name] = "inf"                                      # "the model's" limit)
+        if not d["burn_in"]:            # the option's default: the configurations written
+            del d["burn_in"]            # before it existed keep their bytes
         return d
 
+
+def check_burn_in(burn_in: object, control_period: float, duration: float) -> float:
+    """``burn_in`` [s] as a float: finite, ≥ 0, and leaving at least one of the episode's
+    ``max(1, round(duration / T))`` control periods (it is rounded to ``round(burn_in / T)``
+    periods); otherwise a one-line :class:`ConfigError` naming ``burn_in``."""
+    if isinstance(burn_in, bool) or not isinstance(burn_in, int | float) \
+            or not np.isfinite(burn_in) or burn_in < 0:
+        raise ConfigError(f"burn_in: expected a finite number of seconds ≥ 0, got {burn_in!r}")
+    if round(burn_in / control_period) >= max(1, round(duration / control_period)):
+        raise ConfigError(f"burn_in: expected less than the episode's duration ({duration:g} s), "
+                          f"got {burn_in!r} s")
+    return float(burn_in)

@@ -221,6 +221,10 @@ class TimeVaryingKalman(Estimator):
             self._M.append(self.Phi @ P @ self.Phi.T + self.Qd)       # M⁺ = Φ P Φᵀ + Q_d
         return self._M[a], self._P[a], self._L[a]
 
+    def covariances(self, a: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(M_a, P_a, L_a)`` of age ``a`` (the closed-form theory follows the gains)."""
+        return self._covariances(a)
+
     def reset(self, x_hat0: np.ndarray, rows: np.ndarray | None = None) -> None:
         super().reset(x_hat0, rows)
         if rows is None:

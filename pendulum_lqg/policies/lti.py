@@ -92,12 +92,33 @@ def lti_scenario(plant: LTIPlant, *, duration: float = 10.0, noise_scale: float 
 
 
 def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+luenberger"), *,
-               noise_scale: float = 1.0, duration: float = 10.0) -> dict[str, Any]:
+               noise_scale: float = 1.0, duration: float = 10.0, estimate0: str = "zero",
+               burn_in: float = 0.0) -> dict[str, Any]:
     """The stationary closed loop (:class:`~pendulum_lqg.policies.theory.ClosedLoopTheory`) of
-    each built-in policy on ``plant`` with its noise scaled by ``noise_scale`` (std)."""
-    from pendulum_lqg.policies.theory import StationaryProblem, linear_estimator, stationary
+    each built-in policy on ``plant`` with its noise scaled by ``noise_scale`` (std), and the
+    expected RMS over an episode of ``duration`` seconds from the file's ``x0``, ``x0_std`` and
+    ``estimate0`` (after ``burn_in`` seconds). A negative or too large ``noise_scale``, a
+    ``duration`` that is not a positive number and a ``burn_in`` not shorter than it are refused
+    with the scenario's own checks, one line each (not the whole scenario: a file may be
+    sampled slower than the loop's ceiling of the control period)."""
+    from pendulum_lqg.core.noise import NoiseModel
+    from pendulum_lqg.core.scenario import check_burn_in
+    from pendulum_lqg.policies.theory import (
+        StationaryProblem,
+        episode_start,
+        linear_estimator,
+        stationary,
+    )
+    from pendulum_lqg.util.config import positive_number
 
-    s2 = float(noise_scale) ** 2
+    s = NoiseModel(scale=noise_scale).scale
+    duration = positive_number("duration", duration)
+    burn_in = check_burn_in(burn_in, plant.control_period, duration)
+    if estimate0 not in ("zero", "true"):
+        raise ConfigError(f"estimate0: expected 'zero' or 'true', got {estimate0!r}")
+    s2 = s * s
+    x0 = np.zeros(plant.n_states) if plant.x0 is None else plant.x0
+    x0_std = np.zeros(plant.n_states) if plant.x0_std is None else plant.x0_std
     out = {}
     for name in names:
         policy = design_lti_policy(plant, name)
@@ -109,7 +130,9 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
         out[name] = stationary(prob, name=name, duration=duration,
                                limits={"force_limit": plant.force_limit},
                                state_names=plant.state_names,
-                               units=("",) * plant.n_states)
+                               units=("",) * plant.n_states,
+                               start=episode_start(x0, x0_std, estimate0, policy),
+                               burn_in=burn_in)
     return out
 
 

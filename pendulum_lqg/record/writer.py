@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import collections
+import contextlib
+import errno
 import sys
 import time
 from collections.abc import Mapping, Sequence
@@ -14,6 +16,7 @@ import numpy as np
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.plant import CART_BODY, POLE_BODY, STATE_NAMES, Plant
+from pendulum_lqg.util.files import replacing
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
@@ -429,24 +432,34 @@ def record_episodes(trajectories: Sequence[Trajectory], *, plant: Plant, scenari
     blueprint = _blueprint(prefixes, estimated=estimated, covariance=covariance, eye=eye(plant))
     rec = rr.RecordingStream(application_id)
     out_path = recording_path(path) if path is not None else None
-    viewer, viewer_note = _open_sinks(rr, rec, out_path, spawn=spawn, blueprint=blueprint)
-    rec.send_recording_name(f"{policy.name}: {len(trajectories)} episode(s)")
-
-    w = _Writer(rr, rec)
-    for entity, text in (("/config", config_markdown(plant, scenario, policy, config)),
-                         ("/summary", summary_markdown(trajectories, by_episode))):
-        w.static(entity, rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN))
-    for pre, tr, label in prefixes:
-        _record_episode(w, plant, tr, pre, estimated=estimated, label=label, u_max=plant.u_max)
-    viewer_reached: bool | None = None if not spawn else viewer
-    note = _flush(rec, viewer)
-    if note is not None:
-        viewer_reached, viewer_note = False, note
+    with _file_target(out_path) as tmp:
+        viewer, viewer_note = _open_sinks(rr, rec, tmp, spawn=spawn, blueprint=blueprint)
+        rec.send_recording_name(f"{policy.name}: {len(trajectories)} episode(s)")
+        w = _Writer(rr, rec)
+        for entity, text in (("/config", config_markdown(plant, scenario, policy, config)),
+                             ("/summary", summary_markdown(trajectories, by_episode))):
+            w.static(entity, rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN))
+        for pre, tr, label in prefixes:
+            _record_episode(w, plant, tr, pre, estimated=estimated, label=label,
+                            u_max=plant.u_max)
+        note = _flush(rec, viewer)
+    viewer_reached: bool | None = None if not spawn else (viewer and note is None)
+    viewer_note = note if note is not None else viewer_note
     seconds = time.perf_counter() - t_start
     size = out_path.stat().st_size if out_path is not None and out_path.exists() else 0
     return RecordingStats(episodes=len(trajectories), entities=len(w.entities), rows=w.rows,
                           seconds=seconds, seconds_logging=w.seconds, path=out_path, bytes=size,
                           viewer_reached=viewer_reached, viewer_note=viewer_note)
+
+
+def _file_target(out_path: Path | None) -> contextlib.AbstractContextManager[Path | None]:
+    """The file the stream is written to: none, or a temporary file beside ``out_path`` renamed
+    over it once flushed (:func:`~pendulum_lqg.util.files.replacing`) — a failed write keeps the
+    old recording whole, and only a new path or a regular file is replaced. Its folder is made."""
+    if out_path is None:
+        return contextlib.nullcontext(None)
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    return replacing(out_path, where="record", what="recording")
 
 
 def _prefixes(trajectories: list[Trajectory], by_episode: dict[int, str],
@@ -479,8 +492,6 @@ def _open_sinks(rr: Any, rec: Any, out_path: Path | None, *, spawn: bool, bluepr
                 ) -> tuple[bool, str | None]:
     """Point ``rec`` at the file ``out_path`` and, with ``spawn``, at a viewer it starts:
     ``(viewer reached, why not)``. Without a file, a viewer that cannot start is an error."""
-    if out_path is not None:
-        out_path.parent.mkdir(parents=True, exist_ok=True)
     viewer_note: str | None = None
     viewer = False
     if spawn:
@@ -510,6 +521,10 @@ def _flush(rec: Any, viewer: bool) -> str | None:
             note = (f"the Rerun viewer did not take the recording within "
                     f"{SPAWN_FLUSH_TIMEOUT:g} s ({' '.join(str(exc).split())[:120]})")
     else:
-        rec.flush()
+        try:
+            rec.flush()
+        except RuntimeError as exc:     # its file sink stopped: a full disk, a file-size limit
+            raise OSError(errno.EIO, "Rerun could not write the recording "
+                          f"({' '.join(str(exc).split())})") from exc
     rec.disconnect()
     return note

@@ -2,7 +2,9 @@
 
 One row per entry, one column group per suite — success rate, mean J of the successes, optimality
 gap to the suite's reference, failure-aware score (:mod:`pendulum_lqg.scoreboard.stats`) — and a
-row per suite's reference and full-state bound underneath. The failure-aware score is the one
+row per suite's reference and full-state bound underneath, then the row of what each suite's
+designs are designed on (the score files' ``designed_on``:
+:func:`~pendulum_lqg.scoreboard.suites.designed_on`). The failure-aware score is the one
 ``score`` stored (``n/a`` where the reference survived no episode, so it is undefined).
 
 Score files that carry a ``method`` (the training runs of one method, one file per training seed:
@@ -162,7 +164,8 @@ def methods_table(scores: Scores, suites: list[str], prints: dict[str, str]) -> 
 
 
 def _reference_lines(scores: Scores, suites: list[str], prints: dict[str, str]) -> list[str]:
-    """The rows of each suite's reference and full-state bound (from any comparable entry)."""
+    """The rows of each suite's reference and full-state bound (from any comparable entry), and
+    what the designs of each suite are designed on (from any comparable entry that says it)."""
     lines = []
     for label, key in (("reference", "reference"), ("full-state bound", "full_state_bound")):
         cells = [label, ""]
@@ -176,6 +179,13 @@ def _reference_lines(scores: Scores, suites: list[str], prints: dict[str, str]) 
             ref = e[key]
             cells += [_pct(ref["success_rate"]), _num(ref["cost_mean"]), f"`{ref['policy']}`", ""]
         lines.append("| " + " | ".join(cells) + " |")
+    cells = ["designed on", ""]
+    for s in suites:
+        said = next((d["suites"][s]["designed_on"] for _, d in scores
+                     if s in d["suites"] and d["suites"][s]["fingerprint"] == prints[s]
+                     and d["suites"][s]["designed_on"] is not None), None)
+        cells += ["" if said is None else _md(said), "", "", ""]
+    lines.append("| " + " | ".join(cells) + " |")
     return lines
 
 
@@ -228,7 +238,10 @@ def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> st
               "survived, divided by the reference's, minus one, with its 95 % paired bootstrap "
               "interval; score: the failure-aware score, the mean over all episodes of J_ref / J "
               "(0 for a failed episode; 1 = the reference), with its 95 % bootstrap interval "
-              "over episodes (n/a: no rows of the suite's reference in the folder)."]
+              "over episodes (n/a: no rows of the suite's reference in the folder). Designed on: "
+              "the model the suite's reference, its full-state bound and every built-in entry are "
+              "designed on — the plant played where the suite fixes its plant, the nominal MJCF "
+              "where it randomises it (blank: score files that do not say)."]
     lines += methods_table(scores, suites, prints)
     if stale:
         lines += ["", "Not comparable (another suite version or episode count): "

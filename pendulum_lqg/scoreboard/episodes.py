@@ -28,9 +28,8 @@ from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.seeding import episode_seeds
 from pendulum_lqg.envs.registration import ENV_ID, register_envs
 from pendulum_lqg.errors import ConfigError, NotApplicable, PluginError
-from pendulum_lqg.model.plant import load_plant
 from pendulum_lqg.policies.loading import build_policy, guard, is_plugin_ref, load_factory
-from pendulum_lqg.scoreboard.suites import Suite
+from pendulum_lqg.scoreboard.suites import Suite, design_plant
 
 #: The fields of a scored episode row.
 ROW_FIELDS = ("episode", "seed", "success", "failure_reason", "cost")
@@ -51,7 +50,9 @@ AgentFactory = Callable[[gym.Env], Agent]
 def policy_rows(suite: Suite, policy: str, *, base_dir: Path | None = None,
                 nthread: int | None = None) -> list[dict[str, Any]]:
     """The rows of a built-in (``"dlqr+kalman"``) or plug-in (``MODULE:ATTR``) policy on the
-    suite, through :func:`~pendulum_lqg.core.runner.run_episodes` (the batch).
+    suite, through :func:`~pendulum_lqg.core.runner.run_episodes` (the batch), designed on (or, a
+    plug-in, given the context of) the suite's design plant
+    (:func:`~pendulum_lqg.scoreboard.suites.design_plant`).
 
     What the policy observes is the suite's: in a ``full-state`` suite it must declare
     ``needs_state = True`` (a built-in ``controller+none``), elsewhere it must not (it would see
@@ -67,9 +68,9 @@ def full_state_rows(suite: Suite, *, nthread: int | None = None) -> list[dict[st
 
 def _batch_rows(suite: Suite, policy: str, *, base_dir: Path | None, nthread: int | None,
                 check: bool) -> list[dict[str, Any]]:
-    simulated, nominal = suite.plants()
+    simulated, design = suite.plants()
     scenario = suite.config.scenario
-    built = build_policy(policy, plant=nominal, scenario=scenario, base_dir=base_dir)
+    built = build_policy(policy, plant=design, scenario=scenario, base_dir=base_dir)
     if check:
         _check_observation(suite, policy, optional_members(built).needs_state)
     res = run_episodes(simulated, scenario, built, seed=suite.seed, episodes=range(suite.episodes),
@@ -128,12 +129,14 @@ class PluginAgent:
     """A batched plug-in policy as a Gymnasium agent of one env (its twin on the Gymnasium path).
 
     ``reset()`` starts one row (``policy.reset(1)``); ``act(obs)`` is ``policy.act(obs[None])``.
-    The env saturates the force as the core does, so the rows equal the plug-in's batch rows.
+    The plug-in is built on the env's design plant (:func:`~pendulum_lqg.scoreboard.suites.design_plant`),
+    as on the batch path, and the env saturates the force as the core does, so the rows equal
+    the plug-in's batch rows.
     """
 
     def __init__(self, env: gym.Env, ref: str, *, base_dir: Path | None = None) -> None:
         base: Any = env.unwrapped
-        self.policy = build_policy(ref, plant=load_plant(base.plant.path), scenario=base.scenario,
+        self.policy = build_policy(ref, plant=design_plant(base.config), scenario=base.scenario,
                                    base_dir=base_dir)
         if base.normalize_action:
             raise ConfigError(f"agent {ref!r}: a plug-in acts in newtons; score it on an env "
@@ -184,12 +187,14 @@ def reference_agent(env: gym.Env) -> Agent:
     """:class:`~pendulum_lqg.envs.agent.LQGAgent` with the design a suite's reference uses for this
     env: full-state feedback (``none``) when the env observes the state, the delay-aware Kalman
     filter (``kalman-delay``) when it has a measurement or actuator delay, else the steady-state
-    Kalman filter (:func:`reference_design`)."""
+    Kalman filter (:func:`reference_design`), designed as the suites' reference is: on the env's
+    plant with its ``model_overrides`` and without its ``randomize`` draws
+    (:func:`~pendulum_lqg.scoreboard.suites.design_plant`, which the env's plant is)."""
     from pendulum_lqg.envs.agent import LQGAgent
 
     base: Any = env.unwrapped
     controller, observer = reference_design(base.observation_mode, base.scenario).split("+")
-    return LQGAgent(env, controller=controller, observer=observer)
+    return LQGAgent(env, controller=controller, observer=observer, design_model="simulated")
 
 
 def reference_design(observation_mode: str, scenario: Any) -> str:

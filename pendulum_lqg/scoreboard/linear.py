@@ -238,9 +238,9 @@ def linear_rows(suite: Any, doc: dict[str, Any], *, name: str, nthread: int | No
     if suite.observes_state:
         raise NotApplicable(f"agent {name!r} takes y = [p, θ]; suite {suite.name!r} "
                             "gives the true state")
-    simulated, nominal = suite.plants()
+    simulated, design = suite.plants()
     scenario = suite.config.scenario
-    policy = linear_policy(doc, limits(nominal, scenario)[2])
+    policy = linear_policy(doc, limits(design, scenario)[2])
     res = run_episodes(simulated, scenario, policy, seed=suite.seed,
                        episodes=range(suite.episodes), nthread=nthread)
     return [{"episode": r["episode"], "seed": r["seed"], "success": r["success"],
@@ -248,5 +248,9 @@ def linear_rows(suite: Any, doc: dict[str, Any], *, name: str, nthread: int | No
 
 
 def write_controller(path: Path, doc: dict[str, Any]) -> None:
-    """Write ``doc`` (:func:`controller_file`) as JSON."""
-    path.write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    """Write ``doc`` (:func:`controller_file`) as JSON, under the output rule
+    (:func:`~pendulum_lqg.util.files.atomic_write`: whole or not at all, only over a regular
+    file)."""
+    from pendulum_lqg.util.files import atomic_write
+
+    atomic_write(path, json.dumps(doc, indent=1, allow_nan=False) + "\n")

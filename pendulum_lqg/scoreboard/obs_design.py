@@ -12,8 +12,10 @@ observation it was trained on:
   a scenario's smaller ``force_limit`` saturates it further inside the env, unseen);
 * ``estimator = "kalman"`` — each frame holds, instead of ``y_t``, the estimate ``x̂_t`` (4 numbers,
   ``[p, θ, ṗ, θ̇]``) of the reference steady-state Kalman filter (``dlqr+kalman``'s estimator,
-  :func:`~pendulum_lqg.policies.loading.build_policy` on the env's nominal plant, control period and nominal
-  noise, as the suites' reference designs it) fed with ``y_t`` and the force applied before it:
+  :func:`~pendulum_lqg.policies.loading.build_policy` on the env's design plant
+  (:func:`~pendulum_lqg.scoreboard.suites.design_plant`: its model with the fixed
+  ``model_overrides``, without the ``randomize`` draws), control period and nominal noise, as the
+  suites' reference designs it) fed with ``y_t`` and the force applied before it:
   the action mapped to newtons as the env maps it and saturated by the core's rule
   (:func:`~pendulum_lqg.core.rules.saturate`), so it is the force the reference's own estimator
   would be told of. ``x̂₀`` starts at 0 as the reference's; a lost sample is the estimator's own
@@ -90,7 +92,8 @@ class KalmanEstimates:
     """The reference steady-state Kalman filter's ``x̂`` for ``n`` rows of an env (``config``, its
     actions in ``[−1, 1]`` if ``normalize_action``), each row on its own (the module docstring).
 
-    The filter is the estimator of ``dlqr+kalman`` as the suites build it; its current-form
+    The filter is the estimator of ``dlqr+kalman`` as the suites build it (on
+    :func:`~pendulum_lqg.scoreboard.suites.design_plant`); its current-form
     recursion ``x̄ = Φx̂ + Γu``, ``x̂ = x̄ + L(y − Cx̄)`` is run by the estimator's own ``reset``,
     ``update`` and ``estimate`` on the rows asked for: ``reset(x̂_prev)`` then ``update(u)`` is
     the time update from the row's last estimate, so any subset of rows can step at a time."""
@@ -100,14 +103,13 @@ class KalmanEstimates:
 
     def __init__(self, config: EnvConfig, normalize_action: bool, n: int) -> None:
         from pendulum_lqg.envs.config import Actions
-        from pendulum_lqg.model.plant import load_plant
         from pendulum_lqg.policies.loading import build_policy
+        from pendulum_lqg.scoreboard.suites import design_plant
 
         if config.observation_mode != "measurement":
             raise ConfigError("estimator: 'kalman' estimates x from y = [p, θ]; this env observes "
                               "the state (observation_mode = 'state')")
-        policy = build_policy("dlqr+kalman", plant=load_plant(config.model_path),
-                              scenario=config.scenario)
+        policy = build_policy("dlqr+kalman", plant=design_plant(config), scenario=config.scenario)
         self.estimator, self.u_max = policy.estimator, policy.u_max
         self.actions = Actions(self.u_max, normalize_action)
         self.x_hat = np.zeros((n, self.SIZE))

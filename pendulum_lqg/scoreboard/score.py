@@ -22,6 +22,10 @@ Per suite, over its ``episodes`` fixed seeds (the same episodes for every entry)
   noise) on the same seeds: its success rate and mean J say what observation costs, the floor no
   estimator reaches.
 
+The reference, the bound and every built-in entry are designed on the suite's design plant
+(:func:`~pendulum_lqg.scoreboard.suites.design_plant`: the plant played where the suite fixes it,
+the nominal MJCF where it randomises it), which each suite entry names (``designed_on``).
+
 The score never uses the Gymnasium reward: only success and J.
 """
 
@@ -91,6 +95,7 @@ def suite_score(suite: Suite, rows: Sequence[dict[str, Any]], reference: Sequenc
                                "cost_mean": full["cost_mean"]}
     out["version"] = suite.version
     out["fingerprint"] = suite.fingerprint()
+    out["designed_on"] = suite.designed_on
     out["rows"] = [dict(r) for r in rows]
     return out
 
@@ -105,7 +110,9 @@ def score_document(policy: str, kind: str, suites: Sequence[Suite],
     """The score file of ``policy``: ``{"policy", "kind", "score_version", "versions", "suites":
     {name: {"applicable", "episodes", "success_rate", "success_ci", "cost_mean", "cost_se",
     "optimality_gap", "gap_ci", "gap_episodes", "score_mean", "score_ci", "reference",
-    "full_state_bound", "version", "fingerprint", "rows"}}}``, and the ``run`` keys (``method``,
+    "full_state_bound", "version", "fingerprint", "designed_on", "rows"}}}`` (``designed_on``:
+    what the reference and the built-in designs are designed on,
+    :func:`~pendulum_lqg.scoreboard.suites.designed_on`), and the ``run`` keys (``method``,
     ``seed``: one training run of a method, which ``board`` aggregates) where given; a suite the
     entry cannot play as posed (:class:`~pendulum_lqg.scoreboard.episodes.NotApplicable`) has
     ``"applicable": false`` and the ``"reason"`` instead of the figures. ``kind`` is
@@ -124,7 +131,8 @@ def score_document(policy: str, kind: str, suites: Sequence[Suite],
             rows = rows_of(s)
         except NotApplicable as exc:        # a row that says why, not a number
             entries[s.name] = {"applicable": False, "reason": str(exc), "episodes": s.episodes,
-                               "version": s.version, "fingerprint": s.fingerprint()}
+                               "version": s.version, "fingerprint": s.fingerprint(),
+                               "designed_on": s.designed_on}
         else:
             entries[s.name] = {"applicable": True,
                                **suite_score(s, rows, reference_of(s), bound_of(s))}

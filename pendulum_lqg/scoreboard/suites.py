@@ -16,6 +16,33 @@ The ``[env]`` table is what ``gymnasium.make("pendulum_lqg/CartPoleLQG-v0", **en
 the same keywords give the :class:`~pendulum_lqg.core.scenario.Scenario` a batch plug-in runs in
 (:class:`~pendulum_lqg.envs.config.EnvConfig`), so a Gymnasium agent and a plug-in face the same
 episodes. An unknown key is an error listing the known ones.
+
+**The model the designs know.** The reference, every built-in design, a plug-in's context and the
+Kalman filter an observation design shows (:mod:`~pendulum_lqg.scoreboard.obs_design`) are
+designed on one plant, :func:`design_plant`: the suite's plant *without its per-episode draws* —
+the MJCF of ``model_path`` (default ``models/cartpole.xml``) with the fixed ``model_overrides``
+applied, never a ``randomize`` draw. So
+
+* a suite that fixes its plant (``model_path``, fixed ``model_overrides``, no ``randomize``) is
+  designed on **the plant played**: the designer knows the plant, and the reference is the
+  optimum the gap is taken to (the same plant given as a modified MJCF or as overrides gives the
+  same reference);
+* a suite that randomises its plant (``randomize``, as ``mismatch``) is designed on **the nominal
+  MJCF**: what the designer does not know is the point of the level;
+* with both, the design is on the overridden plant: a randomisation multiplies the overridden
+  values (:meth:`~pendulum_lqg.model.plant.Randomization.apply`), so the overridden plant is the
+  ×1 member of the family the suite draws from, its nominal in the same sense as ``mismatch``'s
+  MJCF; the overrides state the plant and the draws are the unknown. (Were the overrides unknown
+  there, adding a small randomisation to a fixed suite would silently move its reference to
+  another plant.)
+
+A suite that poses a *fixed* model error the designer does not know writes it as a randomisation
+of one value, ``pole_mass_scale = [1.6, 1.6]``. :func:`designed_on` names the case; the score
+files and the board carry it.
+
+Unlike a suite, the ``bench`` experiments and :class:`~pendulum_lqg.envs.agent.LQGAgent` (by
+default) treat overrides as a mismatch (designs on the MJCF as it is): there the overrides are a
+study of a model error, here they define the level.
 """
 
 from __future__ import annotations
@@ -23,11 +50,13 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
 from pendulum_lqg.boundary import read_toml
 from pendulum_lqg.boundary.fields import Invalid, Where, integer, table, text
+from pendulum_lqg.boundary.schemas import DESIGNED_ON
 from pendulum_lqg.envs.config import EnvConfig
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.model.plant import Plant, load_plant
@@ -40,6 +69,25 @@ SUITE_KEYS = ("name", "version", "purpose", "reference", "episodes", "seed", "en
 #: The order in which ``--suite all`` runs and the board shows the shipped suites: easiest first, by
 #: the reference policy's success rate (docs/leaderboard.md gives the figures).
 SUITE_ORDER = ("full-state", "lecture", "mismatch", "delayed", "lossy", "noisy", "hard")
+#: What the designs of a suite are designed on (:func:`designed_on`; the module docstring).
+PLANT_PLAYED, NOMINAL_MJCF, NOMINAL_WITH_OVERRIDES = DESIGNED_ON
+
+
+def design_plant(config: EnvConfig) -> Plant:
+    """The plant the designs of an env's episodes are designed on (the module docstring): the MJCF
+    of ``config.model_path`` with the fixed ``model_overrides``, without any ``randomize`` draw —
+    the plant played where the plant is fixed, the nominal of the randomisation where not."""
+    return load_plant(config.model_path, overrides=config.scenario.overrides)
+
+
+def designed_on(config: EnvConfig) -> str:
+    """What :func:`design_plant` is for ``config``: :data:`PLANT_PLAYED` (no randomisation),
+    :data:`NOMINAL_MJCF` (a randomisation around the MJCF as it is) or
+    :data:`NOMINAL_WITH_OVERRIDES` (a randomisation around the overridden plant)."""
+    scenario = config.scenario
+    if scenario.randomize.is_empty():
+        return PLANT_PLAYED
+    return NOMINAL_MJCF if scenario.overrides.is_empty() else NOMINAL_WITH_OVERRIDES
 
 
 @dataclass(frozen=True)
@@ -54,6 +102,7 @@ class Suite:
     env : the Gymnasium env keywords that define the scenario
     origin : where the suite was read (its file), named by the errors found when it is played
     config : the validated :class:`~pendulum_lqg.envs.config.EnvConfig` of ``env``
+    designed_on : what the reference and the built-in designs are designed on (:func:`designed_on`)
     """
 
     name: str
@@ -72,6 +121,12 @@ class Suite:
         except PendulumLQGError as exc:
             raise type(exc)(f"suite {self.name!r}: [env] {exc}") from exc
         object.__setattr__(self, "config", config)
+
+    @property
+    def designed_on(self) -> str:
+        """:data:`PLANT_PLAYED`, :data:`NOMINAL_MJCF` or :data:`NOMINAL_WITH_OVERRIDES`: what
+        :meth:`plants`' design plant is (the module docstring)."""
+        return designed_on(self.config)
 
     @property
     def observes_state(self) -> bool:
@@ -102,27 +157,41 @@ class Suite:
         return exc if str(exc).startswith(where) else type(exc)(f"{where}: {what}: {exc}")
 
     def plants(self) -> tuple[Plant, Plant]:
-        """``(simulated, nominal)`` plants: the simulated one with the scenario's overrides, the
-        nominal one (the MJCF as it is) for the designs."""
-        path = self.config.model_path
+        """``(simulated, design)`` plants: the simulated one with the scenario's overrides (each
+        episode's ``randomize`` draw is applied by the core on top of it), and the one every
+        design for the suite is made on, :func:`design_plant` (two loads: the designs never share
+        the simulator's model)."""
         try:
-            return load_plant(path, overrides=self.config.scenario.overrides), load_plant(path)
+            return (load_plant(self.config.model_path, overrides=self.config.scenario.overrides),
+                    design_plant(self.config))
         except PendulumLQGError as exc:
             raise self.errors_named("env.model_path", exc) from None
 
     def fingerprint(self) -> str:
-        """sha256 of everything that decides the episodes: the definition, the scenario it makes and
-        the model file's bytes. Two scores are comparable only when their fingerprints match."""
+        """sha256 of everything that decides the episodes: the definition, the scenario it makes,
+        the model file's bytes, and what the designs are designed on where that is not the MJCF as
+        it is. Two scores are comparable only when their fingerprints match. Computed once per
+        suite (the model file is read once)."""
+        return self._fingerprint
+
+    @cached_property
+    def _fingerprint(self) -> str:
         try:
             model = load_plant(self.config.model_path).path
         except PendulumLQGError as exc:
             raise self.errors_named("env.model_path", exc) from None
-        blob = json.dumps({"name": self.name, "version": self.version, "episodes": self.episodes,
-                           "seed": self.seed, "reference": self.reference,
-                           "scenario": self.config.scenario.to_dict(),
-                           "observation_mode": self.config.observation_mode,
-                           "model_sha256": hashlib.sha256(Path(model).read_bytes()).hexdigest()},
-                          sort_keys=True, default=str)
+        definition = {"name": self.name, "version": self.version, "episodes": self.episodes,
+                      "seed": self.seed, "reference": self.reference,
+                      "scenario": self.config.scenario.to_dict(),
+                      "observation_mode": self.config.observation_mode,
+                      "model_sha256": hashlib.sha256(Path(model).read_bytes()).hexdigest()}
+        if not self.config.scenario.overrides.is_empty():
+            # the designs were made on the MJCF as it is before the rule of design_plant; a suite
+            # with fixed overrides now has another reference, so its old scores must not compare.
+            # Without overrides the design plant is the MJCF as before: the key is absent and the
+            # fingerprint is the one the committed score files carry
+            definition["designed_on"] = self.designed_on
+        blob = json.dumps(definition, sort_keys=True, default=str)
         return hashlib.sha256(blob.encode()).hexdigest()
 
     def to_dict(self) -> dict[str, Any]:

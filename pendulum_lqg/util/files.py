@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import errno
 import io
 import os
 import stat
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 from pendulum_lqg.errors import ConfigError
 
@@ -39,62 +42,130 @@ def output_file(where: str, path: str | os.PathLike[str] | None, *, what: str = 
         raise ConfigError(f"{where}: expected a path for the {what}, got {text!r}")
     out = Path(text)
     target = regular_target(where, out, what=what)
-    parent = target.parent
-    try:
-        parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"{where}: cannot create the folder {parent}: "
-                          f"{exc.strerror or exc}") from None
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise ConfigError(f"{where}: the folder {parent} is not writable")
+    writable_folder(where, target.parent)
     return target
+
+
+def writable_folder(where: str, folder: Path) -> Path:
+    """``folder`` created (with its parents) if missing, and writable; else one
+    :class:`ConfigError` line naming ``where``."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot create the folder {folder}: "
+                          f"{exc.strerror or exc}") from None
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ConfigError(f"{where}: the folder {folder} is not writable")
+    return folder
+
+
+def output_folder(where: str, path: str | os.PathLike[str] | None, *,
+                  what: str = "outputs") -> Path:
+    """``path`` checked as a folder to write into, before any work starts: absent (it is created,
+    with its parents) or a folder (a symbolic link followed). A regular file, a device, a FIFO, a
+    socket or a symbolic link that loops is one :class:`ConfigError` line naming ``where``, and is
+    left as it is; so is ``''`` and a folder that cannot be written."""
+    text = "" if path is None else os.fspath(path)
+    if not str(text).strip():
+        raise ConfigError(f"{where}: expected a folder for the {what}, got {text!r}")
+    folder = Path(text)
+    try:
+        mode = os.stat(folder).st_mode
+    except FileNotFoundError:
+        mode = None
+    except (OSError, RuntimeError) as exc:
+        looping = getattr(exc, "errno", None) == errno.ELOOP
+        raise ConfigError(f"{where}: {folder} " + ("is a symbolic link that loops" if looping else
+                          f"cannot be inspected ({getattr(exc, 'strerror', None) or exc})")
+                          + f"; expected a folder for the {what}") from None
+    if mode is not None and not stat.S_ISDIR(mode):
+        kind = "a regular file" if stat.S_ISREG(mode) else file_kind(mode)
+        raise ConfigError(f"{where}: {folder} is {kind}; expected a folder for the {what} (it "
+                          "is created if missing; the path is left as it is)")
+    return writable_folder(where, folder)
 
 
 def regular_target(where: str, path: Path, *, what: str = "file") -> Path:
     """The file ``path`` names (a symbolic link followed), which must be absent or a regular
-    file; anything else — a device, a FIFO, a socket, a folder — is one :class:`ConfigError` line,
-    and is left as it is."""
-    target = path.resolve() if path.is_symlink() else path
+    file; anything else — a device, a FIFO, a socket, a folder, a symbolic link that loops — is
+    one :class:`ConfigError` line, and is left as it is."""
     try:
+        target = path.resolve() if path.is_symlink() else path
         mode = os.stat(target).st_mode
     except FileNotFoundError:
         return target
-    except OSError as exc:
-        raise ConfigError(f"{where}: cannot inspect {path}: {exc.strerror or exc}") from None
+    except (OSError, RuntimeError) as exc:     # pathlib reports a loop as RuntimeError (< 3.13)
+        if isinstance(exc, RuntimeError) or exc.errno == errno.ELOOP:
+            raise ConfigError(f"{where}: {path} is a symbolic link that loops (or a chain of "
+                              f"too many links); expected a regular file or a new path for the "
+                              f"{what} (it is left as it is)") from None
+        raise ConfigError(f"{where}: cannot inspect {path}: "
+                          f"{getattr(exc, 'strerror', None) or exc}") from None
     if not stat.S_ISREG(mode):
         raise ConfigError(f"{where}: {path} is {file_kind(mode)}; expected a regular file or a "
                           f"new path for the {what} (it is left as it is)")
     return target
 
 
-def atomic_write(path: Path, text: str | bytes) -> None:
-    """Write ``text`` (or bytes: a picture) to ``path`` so that ``path`` is never half-written and
-    nothing is left behind.
+@contextlib.contextmanager
+def replacing(path: str | os.PathLike[str], *, where: str = "out",
+              what: str = "file") -> Iterator[Path]:
+    """A new temporary path beside ``path`` to write to; when the block ends without error it
+    replaces ``path`` atomically, so ``path`` is never half-written.
 
-    The text goes to a new temporary file beside ``path`` (created exclusively), is flushed and
-    fsynced, and replaces ``path`` with ``os.replace``; the folder is fsynced after the rename so
-    the new name survives a crash. On any error — a full disk, a Ctrl-C — the temporary file is
-    removed and ``path`` keeps its old content. A ``path`` that exists and is not a regular file
-    (a device, a FIFO, a folder) is refused: only regular files are ever replaced."""
-    target = regular_target("out", Path(path))
+    The output rule of every file the package writes for a user (pictures, recordings, scores,
+    boards, results): ``path`` must be absent or a regular file (:func:`regular_target`: a device,
+    a FIFO, a socket, a folder or a looping symbolic link is one :class:`ConfigError` line naming
+    ``where``, and is left as it is). The temporary file is created exclusively in the same folder
+    and keeps ``path``'s suffix (writers that pick a format by the suffix — matplotlib, Rerun —
+    see the right one); after the block it is fsynced and renamed over the target
+    (``os.replace``), and the folder is fsynced so the new name survives a crash. On any error
+    (a full disk, a file-size limit, a Ctrl-C) the temporary file is removed and ``path`` keeps
+    its old content whole::
+
+        with replacing(out, where="--plot", what="picture") as tmp:
+            fig.savefig(tmp, format="png")
+    """
+    target = regular_target(where, Path(path), what=what)
     tmp = target.with_name(f".{target.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
     try:
-        if isinstance(text, bytes):
-            with open(fd, "wb") as fb:
-                fb.write(text)
-                fb.flush()
-                os.fsync(fb.fileno())
-        else:
-            with open(fd, "w", encoding="utf-8", newline="") as fh:
-                fh.write(text)
-                fh.flush()
-                os.fsync(fh.fileno())
+        yield tmp
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError) and exc.filename in (None, str(tmp)):
+            # named after the user's file, not the hidden temporary one (same errno and class)
+            raise OSError(exc.errno, exc.strerror, str(target)) from exc
         raise
     _fsync_folder(target.parent)
+
+
+def atomic_write(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` so that ``path`` is never half-written and nothing is left behind
+    (:func:`replacing`: only a new path or a regular file is ever replaced)."""
+    with replacing(path) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+        fh.write(text)
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], *, where: str = "out",
+                what: str = "picture", dpi: float | None = None,
+                bbox_inches: str | None = None) -> Path:
+    """``fig.savefig(…)`` (a matplotlib ``Figure``) under the output rule (:func:`replacing`): the
+    picture at ``path`` is replaced whole or not at all. The format is ``path``'s suffix
+    (``.png``, ``.svg``, ``.pdf``); ``dpi`` and ``bbox_inches`` are ``Figure.savefig``'s (``None``:
+    its default, ``rcParams["savefig.*"]``). Returns the path written (a symbolic link followed)."""
+    target = regular_target(where, Path(path), what=what)
+    fmt = target.suffix.lstrip(".").lower() or None
+    with replacing(target, where=where, what=what) as tmp:
+        options = {k: v for k, v in (("dpi", dpi), ("bbox_inches", bbox_inches)) if v is not None}
+        fig.savefig(tmp, format=fmt, **options)
+    return target
 
 
 def _fsync_folder(folder: Path) -> None:

@@ -7,6 +7,11 @@ is bounded here, and each bound is checked before any work starts, with a one-li
 
 from __future__ import annotations
 
+import itertools
+import operator
+from collections.abc import Iterable
+from typing import Any
+
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
@@ -50,6 +55,11 @@ MAX_INPUT_BYTES = 256 * 2**20
 #: Nesting of tables and lists in a file read at the boundary: the project's formats nest at most
 #: five deep; the parsers recurse once per level.
 MAX_NESTING = 64
+#: Episodes of one :func:`~pendulum_lqg.core.runner.run_episodes` call (the Python API): each is a
+#: row of every array of the batched core — a MuJoCo simulation, its noise block, its generator —
+#: and keeps its metric row. The front ends stay within it: ``run`` steps :data:`RUN_BATCH` at a
+#: time, ``score`` at most :data:`MAX_SCORE_EPISODES`, ``bench`` a work unit.
+MAX_BATCH_EPISODES = 100_000
 #: Episodes ``run`` steps together: bounded so memory does not grow with ``--episodes`` and long
 #: runs report progress between batches (results do not depend on the batching).
 RUN_BATCH = 1024
@@ -65,6 +75,43 @@ def check_at_most(where: str, value: int, ceiling: int, why: str, *,
     return value
 
 
+def check_episodes(episodes: Iterable[Any], *, trajectory: bool = False) -> list[int]:
+    """The episode numbers of one batch as a list of ints, counted before any is made.
+
+    At least one, at most :data:`MAX_BATCH_EPISODES` (:data:`MAX_RECORDED_EPISODES` with
+    ``trajectory``: every period of every episode is kept); a ``range`` or an array is counted by
+    its length, any other iterable read at most one past the ceiling, so ``range(10**9)`` is
+    refused at once. Otherwise one :class:`ConfigError` line naming ``episodes``."""
+    ceiling, why = ((MAX_RECORDED_EPISODES, "trajectory=True keeps every period of every episode")
+                    if trajectory else
+                    (MAX_BATCH_EPISODES, "each is a row of every array of the batched core and "
+                     "keeps its metric row; run larger studies in batches, or through bench"))
+    try:
+        count = len(episodes)                        # type: ignore[arg-type]
+    except TypeError:                                # a generator: read one past the ceiling
+        episodes = list(itertools.islice(episodes, ceiling + 1))
+        count = len(episodes)
+        if count > ceiling:
+            raise ConfigError(f"episodes: at most {ceiling:,} ({why}), got more") from None
+    check_at_most("episodes", count, ceiling, why)
+    if count == 0:
+        raise ConfigError("episodes: expected at least one episode number, got an empty "
+                          "collection")
+    try:
+        return [operator.index(e) for e in episodes]
+    except TypeError:
+        bad = next(e for e in episodes if not _is_index(e))
+        raise ConfigError(f"episodes: expected integer episode numbers, got {bad!r}") from None
+
+
+def _is_index(value: Any) -> bool:
+    try:
+        operator.index(value)
+    except TypeError:
+        return False
+    return True
+
+
 #: Ceiling of the control period T [s]. The cart-pole's unstable pole (≈ 4 rad/s) grows by e⁴ over
 #: one second; far longer periods overflow the designs (e^{AT}) and mean nothing for this problem.
 MAX_CONTROL_PERIOD = 1.0
@@ -77,6 +124,10 @@ MAX_STEPS_PER_PERIOD = 10_000
 #: Ceiling of the control periods per episode (duration / T): keeps an episode finite (10⁸ periods
 #: are ~10⁹ physics steps, hours per episode) and its metrics' counters exact.
 MAX_PERIODS = 10**8
+#: Ceiling of a noise scale (it multiplies the noise's standard deviations, its covariances by its
+#: square): far beyond any physical noise, and far below where the theory's covariances or a
+#: period's noise overflow a float (scale² past 10³⁰⁸ is inf).
+MAX_NOISE_SCALE = 1e12
 #: Ceiling of a measurement or actuator delay in control periods (a ring buffer of that many slots
 #: per episode).
 MAX_DELAY_PERIODS = 10_000

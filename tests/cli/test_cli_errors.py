@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 from conftest import assert_one_line_error, run_cli
 
@@ -57,3 +59,48 @@ def test_record_paths_that_cannot_be_a_recording_are_refused_before_running(tmp_
     status, err = run_cli(capsys, ["bench", "lecture", "--episodes", "1", "--record", "",
                                    "--out", str(tmp_path / "o")])
     assert_one_line_error(status, err, "--record: expected a folder for the recordings, got ''")
+
+
+# ---- 3. outputs: one rule for every written file (issue 45) --------------------------------------
+def test_run_plot_failed_write_keeps_the_old_picture(tmp_path):
+    """A write that fails midway (here a file-size limit, as `ulimit -f 4`) leaves the old picture
+    whole: the new one is written beside it and renamed only once complete. It used to be
+    truncated to the 4 096 bytes written."""
+    import resource
+    import subprocess
+    import sys
+
+    old = b"\x89PNG\r\n\x1a\n" + bytes(range(256)) * 80          # 20 kB, larger than the limit
+    picture = tmp_path / "episode.png"
+    picture.write_bytes(old)
+
+    def limit_file_size():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
+
+    done = subprocess.run([sys.executable, "-m", "pendulum_lqg.cli", "run", "--episodes", "1",
+                           "--duration", "0.5", "--plot", str(picture)],
+                          capture_output=True, text=True, preexec_fn=limit_file_size,
+                          cwd=tmp_path, env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
+                          timeout=600)
+    assert picture.read_bytes() == old, f"{picture.stat().st_size} bytes left"
+    assert_one_line_error(done.returncode, done.stderr,
+                          f"cannot write or read {picture}: File too large")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["episode.png"]   # no temporary left
+
+
+@pytest.mark.parametrize("where", ["--plot", "--record", "score --out", "board --out"])
+def test_symlink_loop_output_refused_in_one_line(tmp_path, capsys, where):
+    """An output path that is a symbolic link to itself: one line naming the option, exit 2,
+    before any work (it was a RuntimeError traceback from pathlib)."""
+    loop = tmp_path / {"--plot": "loop.png", "--record": "loop.rrd", "score --out": "loop.json",
+                       "board --out": "loop.md"}[where]
+    loop.symlink_to(loop.name)
+    argv = {"--plot": ["run", "--episodes", "1", "--duration", "0.1", "--plot", str(loop)],
+            "--record": ["run", "--episodes", "1", "--duration", "0.1", "--record", str(loop)],
+            "score --out": ["score", "dlqr+kalman", "--suite", "lecture", "--episodes", "1",
+                            "--out", str(loop)],
+            "board --out": ["board", str(tmp_path), "--out", str(loop)]}[where]
+    status, err = run_cli(capsys, argv)
+    assert_one_line_error(status, err, f"{where.split()[-1]}: {loop} is a symbolic link that "
+                                       "loops")
+    assert os.readlink(loop) == loop.name                      # left as it is

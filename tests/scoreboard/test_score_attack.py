@@ -166,6 +166,10 @@ def _deep(n):
 _DAMAGE = {
     "fingerprint missing": (lambda d: d["suites"]["lecture"].pop("fingerprint"),
                             "suites.lecture.fingerprint: missing"),
+    "designed_on unknown": (
+        lambda d: d["suites"]["lecture"].__setitem__("designed_on", "the true plant"),
+        "suites.lecture.designed_on: expected one of plant played, nominal MJCF, "
+        "nominal MJCF + model_overrides"),
     "gap_ci not a pair": (lambda d: d["suites"]["lecture"].__setitem__("gap_ci", 3),
                           "suites.lecture.gap_ci: expected a list of 2"),
     "reference a string": (lambda d: d["suites"]["lecture"].__setitem__("reference", "x"),
