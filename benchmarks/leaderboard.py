@@ -38,7 +38,7 @@ AGENTS = {"agent_LQGAgent": "pendulum_lqg.scoreboard.episodes:reference_agent",
           "agent_python_control_lqg": "experiments/agents/python_control_lqg.py:make",
           "agent_zero_force": "experiments/agents/zero_force.py:make"}
 #: The first board's RL models (scored with --rl, beside every run ``METHOD-seedS`` of
-#: benchmarks/train_agents.py and benchmarks/train_linear.py that the models folder holds).
+#: ``pendulum-lqg train`` that the models folder holds).
 MODELS = ("ppo-lecture", "recurrentppo-lecture", "sac-lecture", "ppo-full-state")
 
 
@@ -46,7 +46,7 @@ def rl_entries(models: Path) -> list[tuple[str, dict]]:
     """``(score file stem, score_entry keywords)`` of every RL model: the first board's four, then
     each training run — an SB3 zip, or a linear controller file (a ``.json`` without a zip
     beside it). Runs of the noise ladder (``METHOD-noiseX-seedS``) are not board entries: they
-    are scored at their own noise by benchmarks/noise_ladder.py."""
+    are scored at their own noise by ``python -m pendulum_lqg.learn.noise_ladder``."""
     out = [(f"rl_{m}", {"agent": f"sb3:{_ref(models / f'{m}.zip')}"}) for m in MODELS]
     for path in sorted(models.glob("*-seed*.*")):
         if "-noise" in path.stem or path.name.endswith("-curve.csv"):

@@ -22,7 +22,7 @@ import pendulum_lqg
 from pendulum_lqg.core.metrics import mean_se, wilson_interval
 from pendulum_lqg.core.seeding import episode_seed
 from pendulum_lqg.envs.agent import LQGAgent
-from pendulum_lqg.policies.lqg import OBSERVERS
+from pendulum_lqg.names import OBSERVERS
 
 
 def main() -> None:

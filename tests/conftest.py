@@ -134,7 +134,7 @@ def interruptible_cli(*args):
     return [sys.executable, "-c", _INTERRUPTIBLE_CLI, *map(str, args)]
 
 
-def load_benchmark_script(stem: str, alias: str):
+def load_benchmark_script(stem: str, alias: str):  # the measurement scripts of benchmarks/
     """The module of ``benchmarks/STEM.py`` (a script, not a package module), imported under
     ``alias`` and kept in ``sys.modules`` so that pickling and relative lookups find it."""
     import importlib.util
@@ -147,3 +147,12 @@ def load_benchmark_script(stem: str, alias: str):
     sys.modules[alias] = module
     spec.loader.exec_module(module)
     return module
+
+
+@pytest.fixture
+def few_curve_episodes(monkeypatch):
+    """Training runs' learning curves on 4 episodes instead of 20: the tests check what a point
+    is, not its precision (``pendulum_lqg.learn.runs.eval_suite`` reads the constant when called)."""
+    from pendulum_lqg.learn import runs
+
+    monkeypatch.setattr(runs, "EVAL_EPISODES", 4)

@@ -1,11 +1,11 @@
 """The ``pendulum-lqg`` command: ``design``, ``run``, ``bench``, ``perf``, ``report``, ``score``,
-``board``, ``theory``.
+``board``, ``theory``, ``train``.
 
-Modules: ``parser`` (the grammar and the arguments' conversions), ``design``, ``commands`` and
-``score`` (one function per subcommand). Only argument parsing and presentation live here; every
-computation is a library call. Heavy imports (numpy, MuJoCo, python-control, rich) happen inside
-the commands so ``--help`` is instant. Bad input prints one line ``error: …`` naming the parameter
-and exits with status 2.
+Modules: ``parser`` (the grammar and the arguments' conversions), ``design``, ``commands``,
+``score``, ``theory``, ``lti`` and ``train`` (one function per subcommand). Only argument parsing
+and presentation live here; every computation is a library call. Heavy imports (numpy, MuJoCo,
+python-control, rich) happen inside the commands so ``--help`` is instant. Bad input prints one
+line ``error: …`` naming the parameter and exits with status 2.
 """
 
 from __future__ import annotations
@@ -19,12 +19,14 @@ from pendulum_lqg.cli.design import cmd_design
 from pendulum_lqg.cli.parser import EXIT_USAGE, build_parser
 from pendulum_lqg.cli.score import cmd_board, cmd_score
 from pendulum_lqg.cli.theory import cmd_theory
+from pendulum_lqg.cli.train import cmd_train
 
 #: Exit status of a run stopped by Ctrl-C (128 + SIGINT, as a shell reports it).
 EXIT_INTERRUPTED = 130
 
 COMMANDS = {"design": cmd_design, "run": cmd_run, "bench": cmd_bench, "perf": cmd_perf,
-            "report": cmd_report, "score": cmd_score, "board": cmd_board, "theory": cmd_theory}
+            "report": cmd_report, "score": cmd_score, "board": cmd_board, "theory": cmd_theory,
+            "train": cmd_train}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -12,6 +12,7 @@ from typing import Any, NoReturn
 
 from pendulum_lqg.cli.score import add_call_timeout
 from pendulum_lqg.cli.score import add_parsers as add_score_parsers
+from pendulum_lqg.cli.train import add_train_parser
 from pendulum_lqg.core import defaults
 from pendulum_lqg.names import CONTROLLERS, LECTURE_POLICIES, OBSERVERS, PLANTS
 from pendulum_lqg.version import __version__
@@ -404,6 +405,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_perf_parser(sub)
     add_score_parsers(sub, _positive_int)
     add_theory_parser(sub)
+    add_train_parser(sub)
     return parser
 
 

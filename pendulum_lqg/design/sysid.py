@@ -41,7 +41,7 @@ from pendulum_lqg import design
 from pendulum_lqg.errors import ConfigError
 
 __all__ = ["IdentifiedModel", "fit_structured", "identify", "lqg_gains", "markov_parameters",
-           "noise_covariances"]
+           "noise_covariances", "structured_model", "structured_size"]
 
 
 @dataclass(frozen=True)
@@ -102,12 +102,13 @@ def markov_parameters(Y: np.ndarray, U: np.ndarray, valid: np.ndarray,
     return G, intercepts, residuals
 
 
-def _model(params: np.ndarray, p: int, dt: float,
-           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def structured_model(params: np.ndarray, p: int, dt: float,
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(Φ, Γ, C, A, B)`` of the mechanical structure ``A = [[0, I], [A₂₁, A₂₂]]``,
     ``B = [0; b]``, ``C = [I 0]`` from ``params = [A₂₁ without its first column, A₂₂, b]``
-    (row-major), ZOH at ``dt``. The first column of ``A₂₁`` is 0: a cart on a level track is
-    translation invariant, no force depends on its position ``p``."""
+    (row-major; ``2p²`` numbers, :func:`structured_size`), ZOH at ``dt``. The first column of
+    ``A₂₁`` is 0: a cart on a level track is translation invariant, no force depends on its
+    position ``p``. ``A`` and ``B`` are affine in ``params``."""
     A = np.zeros((2 * p, 2 * p))
     A[:p, p:] = np.eye(p)
     A[p:, 1:p] = params[:p * (p - 1)].reshape(p, p - 1)
@@ -117,6 +118,11 @@ def _model(params: np.ndarray, p: int, dt: float,
     Phi, Gamma = design.zoh(A, B, dt)
     C = np.hstack([np.eye(p), np.zeros((p, p))])
     return Phi, Gamma, C, A, B
+
+
+def structured_size(p: int) -> int:
+    """The number of parameters of :func:`structured_model` with ``p`` outputs: ``2p²``."""
+    return 2 * p * p
 
 
 def _markov_of(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, count: int) -> np.ndarray:
@@ -130,7 +136,7 @@ def _markov_of(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, count: int) ->
 def fit_structured(G: np.ndarray, m: np.ndarray, dt: float, u_rms: float,
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(Φ, Γ, C, A, B)`` of the model in the basis ``[y, ẏ]`` (the mechanical structure of
-    :func:`_model`: the second half of the state is the derivative of ``y``) whose Markov parameters
+    :func:`structured_model`: the second half of the state is the derivative of ``y``) whose Markov parameters
     and free response fit the regression's ``G`` (N, p, 1) and intercepts ``m`` (N+1, p) best in
     least squares, with the initial state ``[m_0, ẏ_0]`` (``ẏ_0`` fitted too).
 
@@ -149,14 +155,14 @@ def fit_structured(G: np.ndarray, m: np.ndarray, dt: float, u_rms: float,
     scale = float(np.abs(m - m[0]).max() + u_rms * np.abs(G).max()) or 1.0
 
     def residual(params: np.ndarray) -> np.ndarray:
-        Phi, Gamma, C, _, _ = _model(params[:-p], p, dt)
+        Phi, Gamma, C, _, _ = structured_model(params[:-p], p, dt)
         x0 = np.concatenate([m[0], params[-p:]])
         free = _markov_of(Phi, x0[:, None], C, N + 1)[:, :, 0]
         forced = _markov_of(Phi, Gamma, C, N)
         return np.concatenate([(free - m).ravel(), u_rms * (forced - G).ravel()]) / scale
 
     fit = least_squares(residual, start, method="lm", x_scale="jac")
-    return _model(fit.x[:-p], p, dt)
+    return structured_model(fit.x[:-p], p, dt)
 
 
 def noise_covariances(Phi: np.ndarray, C: np.ndarray, residuals: np.ndarray, valid: np.ndarray,

@@ -4,4 +4,10 @@
 The deep-RL methods need the ``rl`` extra (stable-baselines3, sb3-contrib, torch), imported only
 inside the functions that train them; identification and random search need nothing beyond the
 package's own dependencies.
+
+Modules: ``methods`` (every method, its options and extra), ``train`` (one run, every input checked
+first), ``runs`` (a run's names, seeds, folder, stop and progress), ``curve`` (the learning curve),
+``deep`` (the SB3 methods), ``ars`` (random search), ``openloop`` (``sysid-openloop``),
+``sysid_lqg`` (``sysid-lqg`` over :mod:`~pendulum_lqg.learn.closed_loop`), ``clone``
+(``ls-clone``), ``pilot``, ``noise_ladder`` and ``figures`` (``python -m pendulum_lqg.learn.X``).
 """

@@ -8,7 +8,7 @@ designs are designed on (the score files' ``designed_on``:
 ``score`` stored (``n/a`` where the reference survived no episode, so it is undefined).
 
 Score files that carry a ``method`` (the training runs of one method, one file per training seed:
-``benchmarks/train_agents.py`` writes the method and seed into the training record, and ``score
+``pendulum-lqg train`` writes the method and seed into the training record, and ``score
 --agent sb3:MODEL.zip`` copies them) are also aggregated in a second table, one row per method:
 per suite, the interquartile mean over the runs of the success rate and of the failure-aware
 score, each with its stratified bootstrap 95 % interval (:func:`~pendulum_lqg.scoreboard.stats.aggregate`).

@@ -90,22 +90,28 @@ def requires(module: str, *, needed_for: str, install: str) -> ModuleType:
                           f"install {install}") from None
 
 
-def run_script(main: Callable[[], Any]) -> NoReturn:
-    """Run a script's ``main()`` under the contract and exit with its status (0, or ``main``'s
-    integer): the library's errors and a file that cannot be written are one line, exit 2; Ctrl-C
-    is one line, exit 130. Any other exception is a bug and keeps its traceback."""
+def script_status(main: Callable[[], Any]) -> int:
+    """``main()`` under the contract, as an exit status (0, or ``main``'s integer): the library's
+    errors and a file that cannot be written are one line, 2; Ctrl-C is one line, 130. Any other
+    exception is a bug and keeps its traceback."""
     try:
         status = main()
     except PendulumLQGError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        raise SystemExit(EXIT_USAGE) from None
+        return EXIT_USAGE
     except KeyboardInterrupt:
         print("interrupted: stopped by Ctrl-C before the script finished", file=sys.stderr)
-        raise SystemExit(EXIT_INTERRUPTED) from None
+        return EXIT_INTERRUPTED
     except BrokenPipeError:                    # e.g. `… | head`
-        raise SystemExit(0) from None
+        return 0
     except OSError as exc:
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"error: cannot write or read {where}{exc.strerror or exc}", file=sys.stderr)
-        raise SystemExit(EXIT_USAGE) from None
-    raise SystemExit(status if isinstance(status, int) else 0)
+        return EXIT_USAGE
+    return status if isinstance(status, int) else 0
+
+
+def run_script(main: Callable[[], Any]) -> NoReturn:
+    """Run a script's ``main()`` under the contract (:func:`script_status`) and exit with its
+    status."""
+    raise SystemExit(script_status(main))

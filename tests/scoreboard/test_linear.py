@@ -1,10 +1,9 @@
-"""Linear controllers as files (``score --agent linear:FILE.json``) and ARS's update: the file
-round-trips, dlqr+kalman written as a state-space controller scores as the built-in, the two forms
-agree, the batch and the Gymnasium path agree, bad files are one line; ARS's step on a quadratic."""
+"""Linear controllers as files (``score --agent linear:FILE.json``): the file round-trips,
+dlqr+kalman written as a state-space controller scores as the built-in, the two forms agree, the
+batch and the Gymnasium path agree, bad files are one line (ARS: tests/learn/test_ars.py)."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import subprocess
 import sys
@@ -114,39 +113,3 @@ def test_the_cli_exits_2_with_one_line(tmp_path):
                          capture_output=True, text=True, check=False)
     assert res.returncode == 2
     assert res.stderr.strip().count("\n") == 0 and "history: missing" in res.stderr
-
-
-@pytest.fixture(scope="module")
-def train_linear():
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    spec = importlib.util.spec_from_file_location("train_linear_t",
-                                                  ROOT / "benchmarks" / "train_linear.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["train_linear_t"] = module               # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_ars_step_on_a_quadratic_is_the_closed_form(train_linear):
-    """r(M) = −|M − M*|²: r(M + νδ) − r(M − νδ) = −4ν δ·(M − M*) exactly, so with every direction
-    kept the step is α/(N σ_R) Σ −4ν (δ·(M − M*)) δ, which for N ≫ d points along M* − M."""
-    rng = np.random.default_rng(0)
-    d, n, nu, alpha = 6, 4000, 0.1, 0.5
-    M, target = np.zeros(d), rng.standard_normal(d)
-    deltas = rng.standard_normal((n, d))
-    r_plus = -(((M + nu * deltas) - target) ** 2).sum(axis=1)
-    r_minus = -(((M - nu * deltas) - target) ** 2).sum(axis=1)
-    step = train_linear.ars_update(M, deltas, r_plus, r_minus, alpha=alpha, top=n) - M
-    sigma = np.std(np.concatenate([r_plus, r_minus]))
-    expected = alpha / (n * sigma) * ((-4 * nu * deltas @ (M - target)) @ deltas)
-    np.testing.assert_allclose(step, expected, rtol=1e-10)
-    cosine = step @ (target - M) / np.linalg.norm(step) / np.linalg.norm(target - M)
-    assert cosine > 0.99
-
-
-def test_ars_keeps_the_best_directions(train_linear):
-    deltas = np.eye(3)
-    r_plus, r_minus = np.array([1.0, 5.0, 2.0]), np.array([0.0, 1.0, 3.0])
-    step = train_linear.ars_update(np.zeros(3), deltas, r_plus, r_minus, alpha=1.0, top=1)
-    # direction 1 (max 5) alone: (5 − 1)/σ_R with σ_R = std([5, 1]) = 2
-    np.testing.assert_allclose(step, [0.0, 2.0, 0.0])

@@ -1,26 +1,33 @@
 """The noise ladder: RL models and the LQG reference scored at noise_scale 0, 0.25, 0.5 and 1.
 
-    python benchmarks/noise_ladder.py score experiments/agents/models/ppo-history-seed*.zip
-    python benchmarks/noise_ladder.py score --matched experiments/agents/models/ppo-history-noise*-seed*.zip
-    uv run python benchmarks/noise_ladder.py figure      # → docs/leaderboard/noise_ladder.png, .md
+::
 
-``score`` (the ``rl`` extra) plays one suite (``--suite``, default ``lecture``) with its env's
-``noise_scale`` set to each of ``--scales`` — both noises' standard deviations times the scale,
-the designs keeping the nominal noise model
+    python -m pendulum_lqg.learn.noise_ladder score --scores DIR MODELS/ppo-history-seed*.zip
+    python -m pendulum_lqg.learn.noise_ladder score --scores DIR --matched \\
+        MODELS/ppo-history-noise*-seed*.zip
+    python -m pendulum_lqg.learn.noise_ladder figure --scores DIR --figure FIG/noise_ladder.png
+
+``score`` (the ``rl`` extra for SB3 models) plays one suite (``--suite``, default ``lecture``) with
+its env's ``noise_scale`` set to each of ``--scales`` — both noises' standard deviations times the
+scale, the designs keeping the nominal noise model
 (:meth:`~pendulum_lqg.scoreboard.suites.Suite.with_noise_scale`) — for the suite's reference
 policy and for every model given. Each score file goes to ``--scores`` (default
-``docs/leaderboard/noise_ladder/``, ``STEM-atX.json``) as ``pendulum-lqg score …
---noise-scale X --out FILE`` writes it (the same
+``runs/noise_ladder/``; ``docs/leaderboard/noise_ladder/`` holds the committed ones),
+``STEM-atX.json``, as ``pendulum-lqg score … --noise-scale X --out FILE`` writes it (the same
 :func:`~pendulum_lqg.scoreboard.score.score_entry`, with ``noise_scale`` in the file). Without
 ``--matched`` every model is scored at every scale (a model trained at the suite's noise, asked
 how it fares with less); with ``--matched`` a model is scored only at the scale it was trained at
-(its training record's ``env.noise_scale``: ``train_agents.py METHOD --seed S --noise-scale X``).
+(its training record's ``env.noise_scale``: ``pendulum-lqg train METHOD --seed S --noise-scale X``).
 
 ``figure`` reads those score files and draws success rate and failure-aware score against the noise
 scale: per group of runs (a method, and whether its models were trained at the scored noise or at
 the suite's) the median across seeds with its interquartile range, and the reference LQG design.
-It writes the numbers beside the figure (``noise_ladder.md``). The reference's failure-aware score
-against itself is its success rate (``J_ref / J = 1`` on every episode it survives).
+It writes the numbers beside the figure (``noise_ladder.md``; default
+``runs/figures/noise_ladder.png``). The reference's failure-aware score against itself is its
+success rate (``J_ref / J = 1`` on every episode it survives).
+
+Outputs follow the command line's rule: a new path or a regular file, never a device, a FIFO or a
+folder; an existing file is replaced only with ``--force``, and then whole (temp + rename).
 """
 
 from __future__ import annotations
@@ -34,8 +41,13 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "docs" / "leaderboard"
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.learn.runs import RUNS_FOLDER, output_path, write_text
+from pendulum_lqg.util.files import save_figure
+from pendulum_lqg.util.scripts import script_status
+
+SCORES = RUNS_FOLDER / "noise_ladder"
+FIGURE = RUNS_FOLDER / "figures" / "noise_ladder.png"
 SCALES = (0.0, 0.25, 0.5, 1.0)
 LADDER_METHOD = re.compile(r"^(?P<base>.+)-noise(?P<scale>[0-9.e+-]+)$")
 
@@ -48,26 +60,25 @@ def trained_noise(model: Path) -> float:
 
 
 def score(models: list[Path], scales: list[float], suite_name: str, out: Path, *,
-          matched: bool, episodes: int | None) -> None:
+          matched: bool, episodes: int | None, force: bool = False) -> None:
     from pendulum_lqg.scoreboard.score import score_entry
     from pendulum_lqg.scoreboard.suites import load_suite
-    from pendulum_lqg.util.files import atomic_write
 
     suite = load_suite(suite_name).with_episodes(episodes)
-    folder = out
-    folder.mkdir(parents=True, exist_ok=True)
-    cache: dict[Any, Any] = {}
+    jobs: list[tuple[float, str, dict[str, Any]]] = []
     for x in scales:
-        jobs = [("reference", {"policy": suite.reference})]
-        jobs += [(m.stem, {"agent": f"sb3:{m}"}) for m in models
+        jobs += [(x, "reference", {"policy": suite.reference})]
+        jobs += [(x, m.stem, {"agent": f"sb3:{m}"}) for m in models
                  if not matched or trained_noise(m) == x]
-        for stem, entry in jobs:
-            doc = score_entry([suite], cache=cache, noise_scale=x, **entry)
-            path = folder / f"{stem}-at{x:g}.json"
-            atomic_write(path, json.dumps(doc, indent=1, allow_nan=False) + "\n")
-            e = doc["suites"][suite.name]
-            print(f"{path.name}: success {e['success_rate']:.2f}, score {e.get('score_mean')}",
-                  flush=True)
+    paths = [output_path("--scores", out / f"{stem}-at{x:g}.json", force=force, what="score file")
+             for x, stem, _ in jobs]                      # every target checked before any work
+    cache: dict[Any, Any] = {}
+    for (x, _, entry), path in zip(jobs, paths, strict=True):
+        doc = score_entry([suite], cache=cache, noise_scale=x, **entry)
+        write_text(path, json.dumps(doc, indent=1, allow_nan=False) + "\n")
+        e = doc["suites"][suite.name]
+        shown = "–" if e.get("score_mean") is None else f"{e['score_mean']:.3f}"
+        print(f"{path.name}: success {e['success_rate']:.2f}, score {shown}", flush=True)
 
 
 def group_of(doc: dict[str, Any]) -> str:
@@ -94,7 +105,7 @@ def ladder_table(folder: Path, suite: str) -> dict[str, dict[float, list[tuple[f
         out.setdefault(group_of(doc), {}).setdefault(float(raw["noise_scale"]), []).append(
             (e["success_rate"], np.nan if score is None else score))
     if not out:
-        raise SystemExit(f"error: {folder}: no score file with a noise_scale on suite {suite!r}")
+        raise ConfigError(f"--scores: {folder}: no score file with a noise_scale on suite {suite!r}")
     return out
 
 
@@ -122,7 +133,7 @@ def draw(table: dict[str, dict[float, list[tuple[float, float]]]], suite: str, p
     axes[0].set_ylim(-0.02, 1.02)
     axes[0].legend(fontsize=7, loc="best")
     fig.suptitle(f"Noise ladder on `{suite}`: median and interquartile range across seeds")
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, where="--out", what="figure", dpi=120)
 
 
 def markdown(table: dict[str, dict[float, list[tuple[float, float]]]], suite: str) -> str:
@@ -141,13 +152,18 @@ def markdown(table: dict[str, dict[float, list[tuple[float, float]]]], suite: st
         runs = max(len(v) for v in by_scale.values())
         lines.append(f"| {group} | {runs} | " + " | ".join(cells) + " |")
     lines += ["", f"Suite `{suite}` at each noise scale: median [interquartile range] across runs "
-              "of the success rate and the failure-aware score. Made by `uv run python "
-              "benchmarks/noise_ladder.py figure`."]
+              "of the success rate and the failure-aware score. Made by `uv run python -m "
+              "pendulum_lqg.learn.noise_ladder figure`."]
     return "\n".join(lines) + "\n"
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    return script_status(lambda: _main(argv))
+
+
+def _main(argv: list[str] | None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m pendulum_lqg.learn.noise_ladder",
+                                 description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="what", required=True)
     p = sub.add_parser("score", help="score the models and the reference at each noise scale")
     p.add_argument("models", type=Path, nargs="*", help="sb3 model zips (their records beside)")
@@ -156,25 +172,30 @@ def main(argv: list[str] | None = None) -> int:
                    help="score a model only at the noise scale it was trained at")
     p.add_argument("--episodes", type=int, default=None, help="default: the suite's own")
     f = sub.add_parser("figure", help="draw the ladder from the score files")
-    f.add_argument("--figure", type=Path, default=OUT / "noise_ladder.png",
-                   help="the figure; the table goes beside it (.md)")
+    f.add_argument("--figure", type=Path, default=FIGURE,
+                   help=f"the figure; the table goes beside it (.md) (default {FIGURE})")
     for q in (p, f):
         q.add_argument("--suite", default="lecture")
-        q.add_argument("--scores", type=Path, default=OUT / "noise_ladder",
-                       help="folder of the ladder's score files")
+        q.add_argument("--scores", type=Path, default=SCORES,
+                       help=f"folder of the ladder's score files (default {SCORES})")
+        q.add_argument("--force", action="store_true", help="replace existing output files")
     args = ap.parse_args(argv)
     if args.what == "score":
         bad = [x for x in args.scales if not 0 <= x < float("inf")]
         if bad:
-            ap.error(f"--scales: expected finite numbers ≥ 0, got {bad[0]}")
+            raise ConfigError(f"--scales: expected finite numbers ≥ 0, got {bad[0]}")
+        if args.episodes is not None and args.episodes < 1:
+            raise ConfigError(f"--episodes: expected a positive integer, got {args.episodes}")
         score(args.models, args.scales, args.suite, args.scores, matched=args.matched,
-              episodes=args.episodes)
+              episodes=args.episodes, force=args.force)
         return 0
+    figure = output_path("--figure", args.figure, force=args.force, what="figure")
+    table_path = output_path("--figure", figure.with_suffix(".md"), force=args.force,
+                             what="table")
     table = ladder_table(args.scores, args.suite)
-    args.figure.parent.mkdir(parents=True, exist_ok=True)
-    draw(table, args.suite, args.figure)
-    args.figure.with_suffix(".md").write_text(markdown(table, args.suite), encoding="utf-8")
-    print(f"wrote {args.figure} and {args.figure.with_suffix('.md')}")
+    draw(table, args.suite, figure)
+    write_text(table_path, markdown(table, args.suite))
+    print(f"wrote {figure} and {table_path}")
     return 0
 
 

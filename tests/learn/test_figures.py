@@ -1,6 +1,7 @@
-"""benchmarks/rl_figures.py on synthetic score files and curves: the performance profile and the
+"""pendulum_lqg.learn.figures on synthetic score files and curves: the performance profile and the
 probability of improvement are the statistics module's on the method's runs × suites, and the
-learning curves' median and interquartile range are those of the seeds, by hand."""
+learning curves' median and interquartile range are those of the seeds, by hand; a FIFO among the
+inputs is never opened and a FIFO as an output is refused."""
 
 from __future__ import annotations
 
@@ -9,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import load_benchmark_script
 
+from pendulum_lqg.learn import figures
 from pendulum_lqg.scoreboard import stats
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -19,7 +20,7 @@ FINGERPRINTS = {"lecture": "a" * 64, "lossy": "b" * 64, "full-state": "c" * 64}
 
 @pytest.fixture(scope="module")
 def rl_figures():
-    return load_benchmark_script("rl_figures", "rl_figures")
+    return figures
 
 
 def _entry(suite, score, applicable=True):
@@ -109,3 +110,50 @@ def test_budget_sums_wall_seconds_times_threads_per_method(rl_figures, tmp_path)
     assert "| `ppo-history` | 2 | 1,000 | 2700 s | 2.50 |" in table
     assert "| `ars-history` | 1 | 500 | 360 s | 0.10 |" in table
     assert table.rstrip().endswith("| all | 3 | | | 2.60 |")
+
+
+def _curves(folder):
+    header = "env_steps,wall_seconds,success_rate,score_mean,score_ci_lo,score_ci_hi\n"
+    for seed in (0, 1):
+        (folder / f"ppo-history-seed{seed}-curve.csv").write_text(
+            header + "50000,100.0,0.5,0.25,0,0\n", encoding="utf-8")
+        (folder / f"ppo-history-seed{seed}.json").write_text(json.dumps(
+            {"method": "ppo-history", "budget": {"steps": 50000, "wall_seconds": 100.0,
+                                                 "threads": 1}}))
+
+
+def test_rl_figures_refuses_a_fifo(tmp_path, capsys):
+    """A FIFO named like a curve or a record is skipped (not opened: no hang); a FIFO as an
+    output is one line, exit 2."""
+    import os
+
+    _curves(tmp_path)
+    os.mkfifo(tmp_path / "ppo-history-seed2-curve.csv")
+    os.mkfifo(tmp_path / "ppo-history-seed2.json")
+    assert len(figures.read_curves(tmp_path)["ppo-history"]) == 2
+    assert figures.read_budgets(tmp_path) == {"ppo-history": [(50000, 100.0, 1)] * 2}
+    out = tmp_path / "out"
+    out.mkdir()
+    os.mkfifo(out / "budget.md")
+    assert figures.main(["budget", str(tmp_path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: --out: ") and "is a FIFO" in err and len(err.splitlines()) == 1
+    assert figures.main(["curves", str(tmp_path), "--out", str(out)]) == 0
+    assert (out / "curves.png").stat().st_size > 10_000
+
+
+def test_rl_figures_replace_outputs_only_with_force(tmp_path, capsys):
+    _curves(tmp_path)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "budget.md").write_text("mine")
+    assert figures.main(["budget", str(tmp_path), "--out", str(out)]) == 2
+    assert "give --force" in capsys.readouterr().err and (out / "budget.md").read_text() == "mine"
+    assert figures.main(["budget", str(tmp_path), "--out", str(out), "--force"]) == 0
+    assert "| `ppo-history` | 2 | 50,000 | 100 s | 0.06 |" in (out / "budget.md").read_text()
+
+
+def test_rl_figures_on_a_folder_without_curves_is_one_line(tmp_path, capsys):
+    assert figures.main(["curves", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and "no METHOD-seedS-curve.csv" in err

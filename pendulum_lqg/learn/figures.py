@@ -1,9 +1,15 @@
 """The RL baselines' comparisons across training runs: performance profiles, probabilities of
 improvement and learning curves, from the committed score files and curves (nothing is trained).
 
-    uv run python benchmarks/rl_figures.py profile docs/leaderboard/scores   # → profile.png, improvement.md
-    uv run python benchmarks/rl_figures.py curves experiments/agents/models  # → curves.png
-    uv run python benchmarks/rl_figures.py budget experiments/agents/models  # → budget.md
+    python -m pendulum_lqg.learn.figures profile docs/leaderboard/scores --out DIR
+    python -m pendulum_lqg.learn.figures curves experiments/agents/models --out DIR
+    python -m pendulum_lqg.learn.figures budget experiments/agents/models --out DIR
+
+(``profile.png`` and ``improvement.md``; ``curves.png``; ``budget.md``).
+
+Outputs go to ``--out`` (default ``runs/figures/``) by the command line's rule: a new path or a
+regular file, never a device, a FIFO or a folder; an existing file replaced only with ``--force``,
+and then whole. Inputs are read from regular files only (a FIFO named like a curve is skipped).
 
 ``profile``: the score files that name a ``method`` (one per training seed, as ``board``'s methods
 table reads them) and the single entries named by ``--entry`` (default the LQG reference
@@ -16,7 +22,7 @@ episode) gives
 * ``improvement.md`` — the probability of improvement ``P(X > Y)`` of each method over each other,
   with its stratified bootstrap 95 % interval, and the suites it is taken over.
 
-``curves``: every ``METHOD-seedS-curve.csv`` (``benchmarks/train_agents.py``: success rate and
+``curves``: every ``METHOD-seedS-curve.csv`` (``pendulum-lqg train``: success rate and
 failure-aware score on 20 fixed non-suite episodes every ``--eval-every`` env steps) grouped by
 method, and ``curves.png``: per method the median and the interquartile range across seeds of
 success and score against env steps and against wall time. A run's points are linearly
@@ -41,8 +47,12 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "docs" / "leaderboard"
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.learn.runs import RUNS_FOLDER, output_path, write_text
+from pendulum_lqg.util.files import save_figure
+from pendulum_lqg.util.scripts import script_status
+
+OUT = RUNS_FOLDER / "figures"
 #: Thresholds τ of the performance profile (failure-aware score; 1 = the reference).
 TAUS = np.linspace(0.0, 1.25, 126)
 CURVE_FILE = re.compile(r"^(?P<method>.+)-seed(?P<seed>\d+)-curve\.csv$")
@@ -59,20 +69,30 @@ def method_scores(folder: Path, entries: list[str]) -> tuple[list[str], dict[str
     for name in entries:
         found = [d for _, d in scores if d["policy"] == name]
         if not found:
-            raise SystemExit(f"error: --entry: no score file of {name!r} in {folder}")
+            raise ConfigError(f"--entry: no score file of {name!r} in {folder}")
         groups[name] = {name: found[0]}
     suites = [s for s in suites if s != "full-state"]
     groups = {m: runs for m, runs in groups.items()      # methods of the measurement suites
               if any(comparable(runs, s, prints) for s in suites)}
     measured = [s for s in suites if all(comparable(runs, s, prints) for runs in groups.values())]
     if not groups or not measured:
-        raise SystemExit(f"error: {folder}: no method with comparable scores on a measurement suite")
+        raise ConfigError(f"{folder}: no method with comparable scores on a measurement suite")
     out = {}
     for method, runs in groups.items():
         table = [[comparable({0: d}, s, prints) for s in measured] for d in runs.values()]
         out[method] = np.array([[e[0]["score_mean"] for e in row] for row in table
                                 if all(row)], dtype=float)      # runs scored on every suite
     return measured, out
+
+
+def _share_above(tau: float) -> Any:
+    """The statistic ``scores ↦`` the share of scores above ``tau`` (one point of the profile)."""
+    from pendulum_lqg.scoreboard.stats import performance_profile
+
+    def share(scores: np.ndarray) -> float:
+        return float(performance_profile(scores, np.array([tau]))[0])
+
+    return share
 
 
 def draw_profile(scores: dict[str, np.ndarray], suites: list[str], path: Path) -> None:
@@ -86,16 +106,15 @@ def draw_profile(scores: dict[str, np.ndarray], suites: list[str], path: Path) -
         curve = performance_profile(x, TAUS)
         line, = ax.plot(TAUS, curve, label=f"{method} ({x.shape[0]} runs)")
         if x.shape[0] > 1:
-            band = np.array([stratified_bootstrap_ci(
-                x, lambda s, t=t: float(performance_profile(s, [t])[0]), resamples=500)
-                for t in TAUS])
+            band = np.array([stratified_bootstrap_ci(x, _share_above(t), resamples=500)
+                             for t in TAUS])
             ax.fill_between(TAUS, band[:, 0], band[:, 1], color=line.get_color(), alpha=0.2)
     ax.axvline(1.0, color="0.5", lw=0.8, ls=":")
     ax.set(xlabel="failure-aware score τ (J_ref / J, 0 for a failure; 1 = the LQG reference)",
            ylabel="share of run × suite scores > τ", ylim=(-0.02, 1.02),
            title="Performance profile over " + ", ".join(suites))
     ax.legend(fontsize=8, loc="lower left")
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, where="--out", what="figure", dpi=120)
 
 
 def improvement_table(scores: dict[str, np.ndarray], suites: list[str]) -> str:
@@ -121,7 +140,7 @@ def improvement_table(scores: dict[str, np.ndarray], suites: list[str]) -> str:
               "a run of Y on the same suite (ties ½), averaged over the suites "
               + ", ".join(f"`{s}`" for s in suites) + ", with its 95 % stratified bootstrap "
               "interval (runs resampled within each suite, 2 000 resamples). Made by `uv run "
-              "python benchmarks/rl_figures.py profile docs/leaderboard/scores`."]
+              "python -m pendulum_lqg.learn.figures profile docs/leaderboard/scores`."]
     return "\n".join(lines) + "\n"
 
 
@@ -131,7 +150,7 @@ def read_curves(folder: Path) -> dict[str, list[dict[str, np.ndarray]]]:
     out: dict[str, list[dict[str, np.ndarray]]] = {}
     for path in sorted(folder.glob("*-curve.csv")):
         match = CURVE_FILE.match(path.name)
-        if match is None:
+        if match is None or not path.is_file():        # a FIFO or a folder is never opened
             continue
         with path.open(newline="", encoding="utf-8") as f:
             rows = list(csv.DictReader(f))
@@ -141,7 +160,7 @@ def read_curves(folder: Path) -> dict[str, list[dict[str, np.ndarray]]]:
                 for k in ("env_steps", "wall_seconds", "success_rate", "score_mean")}
         out.setdefault(match["method"], []).append(cols)
     if not out:
-        raise SystemExit(f"error: {folder}: no METHOD-seedS-curve.csv")
+        raise ConfigError(f"{folder}: no METHOD-seedS-curve.csv (regular files)")
     return out
 
 
@@ -176,7 +195,7 @@ def draw_curves(curves: dict[str, list[dict[str, np.ndarray]]], path: Path) -> N
     axes[0, 0].legend(fontsize=8)
     fig.suptitle("Learning curves: median and interquartile range across seeds "
                  "(20 fixed non-suite episodes per point)")
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, where="--out", what="figure", dpi=120)
 
 
 # ---- training budgets ----------------------------------------------------------------------------
@@ -189,9 +208,14 @@ def read_budgets(folder: Path) -> dict[str, list[tuple[int, float, int]]]:
 
     out: dict[str, list[tuple[int, float, int]]] = {}
     for path in sorted(folder.glob("*-seed*.json")):
-        if not RUN_FILE.match(path.name):
+        if not RUN_FILE.match(path.name) or not path.is_file():
             continue
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise ConfigError(f"{path}: expected a training record (JSON), got {exc}") from None
+        if not isinstance(doc, dict):
+            continue
         if "budget" in doc:                                     # an SB3 model's training record
             budget = doc["budget"]
             run = (int(budget["steps"]), float(budget["wall_seconds"]), int(budget["threads"]))
@@ -220,34 +244,44 @@ def budget_table(budgets: dict[str, list[tuple[int, float, int]]]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    return script_status(lambda: _main(argv))
+
+
+def _main(argv: list[str] | None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m pendulum_lqg.learn.figures",
+                                 description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="what", required=True)
     p = sub.add_parser("profile", help="performance profile and probability of improvement")
     p.add_argument("scores", type=Path, help="folder of score files (board's)")
     p.add_argument("--entry", action="append", default=None,
                    help="a single entry to add by its policy name (default: dlqr+kalman)")
-    p.add_argument("--out", type=Path, default=OUT)
-    p = sub.add_parser("curves", help="learning curves across seeds")
-    p.add_argument("models", type=Path, help="folder of METHOD-seedS-curve.csv")
-    p.add_argument("--out", type=Path, default=OUT)
-    p = sub.add_parser("budget", help="runs, env steps, wall time and CPU-hours per method")
-    p.add_argument("models", type=Path, help="folder of the runs' METHOD-seedS.json records")
-    p.add_argument("--out", type=Path, default=OUT)
+    q = sub.add_parser("curves", help="learning curves across seeds")
+    q.add_argument("models", type=Path, help="folder of METHOD-seedS-curve.csv")
+    b = sub.add_parser("budget", help="runs, env steps, wall time and CPU-hours per method")
+    b.add_argument("models", type=Path, help="folder of the runs' METHOD-seedS.json records")
+    for x in (p, q, b):
+        x.add_argument("--out", type=Path, default=OUT, help=f"output folder (default {OUT})")
+        x.add_argument("--force", action="store_true", help="replace existing output files")
     args = ap.parse_args(argv)
-    args.out.mkdir(parents=True, exist_ok=True)
+    folder = args.scores if args.what == "profile" else args.models
+    if not folder.is_dir():
+        raise ConfigError(f"{folder}: expected a folder of "
+                          + ("score files" if args.what == "profile" else "training runs"))
+    names = {"profile": ("profile.png", "improvement.md"), "curves": ("curves.png",),
+             "budget": ("budget.md",)}[args.what]
+    paths = [output_path("--out", args.out / n, force=args.force, what=n) for n in names]
     if args.what == "profile":
         suites, scores = method_scores(args.scores, args.entry or ["dlqr+kalman"])
-        draw_profile(scores, suites, args.out / "profile.png")
-        (args.out / "improvement.md").write_text(improvement_table(scores, suites),
-                                                 encoding="utf-8")
-        print(f"wrote {args.out / 'profile.png'} and {args.out / 'improvement.md'}")
+        draw_profile(scores, suites, paths[0])
+        write_text(paths[1], improvement_table(scores, suites))
+        print(f"wrote {paths[0]} and {paths[1]}")
     elif args.what == "budget":
         table = budget_table(read_budgets(args.models))
-        (args.out / "budget.md").write_text(table, encoding="utf-8")
+        write_text(paths[0], table)
         print(table, end="")
     else:
-        draw_curves(read_curves(args.models), args.out / "curves.png")
-        print(f"wrote {args.out / 'curves.png'}")
+        draw_curves(read_curves(args.models), paths[0])
+        print(f"wrote {paths[0]}")
     return 0
 
 

@@ -1,0 +1,60 @@
+"""Every method ``pendulum-lqg train`` knows: its one-line description, its suite and budget, the
+options that apply to it and the extra it needs. Light: nothing here imports numpy or torch."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from pendulum_lqg.learn.deep import METHODS as SB3_METHODS
+
+#: The install line of the ``rl`` extra, said by every SB3 method that misses it.
+RL_EXTRA = "uv sync --extra rl, or pip install 'pendulum-lqg[rl]'"
+
+
+@dataclass(frozen=True)
+class MethodInfo:
+    """One method: what it is, its default suite and env steps, the options it takes."""
+
+    name: str
+    what: str
+    suite: str
+    steps: int
+    kind: str                        # "sb3", "ars", "clone", "sysid-lqg", "sysid-openloop"
+    options: tuple[str, ...] = ()
+
+    @property
+    def extra(self) -> str | None:
+        return "rl" if self.kind == "sb3" else None
+
+
+_LINEAR = {
+    "ars-history": MethodInfo("ars-history", "ARS V2-t from zero: a linear policy of the last 64 "
+                              "(y, u) rows, observation normalisation", "lecture", 300_000, "ars",
+                              ("frames", "alpha", "nu", "eval_every")),
+    "ars-history-clone": MethodInfo("ars-history-clone", "ARS V2-t started from a least-squares "
+                                    "clone (--init FILE, from ls-clone)", "lecture", 300_000, "ars",
+                                    ("frames", "alpha", "nu", "eval_every", "init")),
+    "ls-clone": MethodInfo("ls-clone", "least-squares clone (history of 64) of the identified "
+                           "LQG's actions on closed-loop data", "lecture", 20_000, "clone",
+                           ("frames",)),
+    "sysid-lqg": MethodInfo("sysid-lqg", "closed-loop identification, then certainty-equivalent "
+                            "LQG (one curve point per round)", "lecture", 0, "sysid-lqg"),
+    "sysid-openloop": MethodInfo("sysid-openloop", "least squares from open-loop bursts, then LQG "
+                                 "(the earlier sysid-lqg, kept as evidence)", "lecture", 1_000_000,
+                                 "sysid-openloop"),
+}
+METHODS: dict[str, MethodInfo] = {
+    **{name: MethodInfo(name, m.what, m.suite, m.steps, "sb3",
+                        ("eval_every", "noise_scale")) for name, m in SB3_METHODS.items()},
+    **_LINEAR,
+}
+
+
+def list_lines() -> list[str]:
+    """One line per method: name, default suite, default env steps, the extra, what it is."""
+    out = []
+    for name, m in METHODS.items():
+        steps = "its rounds" if m.kind == "sysid-lqg" else f"{m.steps:,} steps"
+        extra = f"[{m.extra}]" if m.extra else "-"
+        out.append(f"{name:22s} {m.suite:11s} {steps:>15s}  {extra:5s} {m.what}")
+    return out

@@ -1,0 +1,294 @@
+"""The price of not knowing the model: what closed-loop identification reaches with N logged steps.
+
+::
+
+    uv run python -m pendulum_lqg.learn.price run --out docs/leaderboard/price.csv
+    uv run python -m pendulum_lqg.learn.price figure docs/leaderboard/price.csv \\
+        --out docs/leaderboard/price.png
+
+``run``: for every suite, data seed ``S`` and budget ``N`` (logged env steps), the controller of
+:func:`~pendulum_lqg.learn.closed_loop.identify_closed_loop` (root seed ``500 000 + 1000·S``, the
+``train`` command's) with that budget, scored on the suite's own episodes as ``pendulum-lqg
+score`` scores it (:func:`~pendulum_lqg.scoreboard.linear.linear_rows`, the failure-aware score
+against the suite reference's rows, the optimality gap ``J/J* − 1`` on the episodes both
+survived): one CSV row each (``suite, seed, budget, logged_steps, stepped_steps, success, score,
+J, J_ref, gap, wall_seconds``), the file rewritten atomically after every row, so a run stopped
+half-way keeps what it finished (``--resume`` continues it).
+
+``figure``: per suite, the failure-aware score and the gap against the logged env steps (log
+axes; median and interquartile range over the seeds), the deep-RL methods' committed learning
+curves (``METHOD-seedS-curve.csv`` of ``--curves``: their own 20 fixed lecture-like episodes, so
+drawn on the ``lecture`` panel only) on the same axes, and the least-squares slope of
+``log(median gap)`` against ``log(budget)`` over the budgets whose median gap is positive, beside
+the ``1/N`` rate of certainty equivalence (Mania, Tu & Recht 2019), printed. The x position of a
+budget is the budget: it caps the logged steps (a run whose episodes fail early logs fewer, and
+the CSV says how many).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pendulum_lqg.errors import ConfigError, PendulumLQGError
+
+BUDGETS = (5_000, 10_000, 20_000, 50_000, 100_000, 200_000, 500_000)
+SUITES = ("lecture", "mismatch")
+SEEDS = (0, 1, 2, 3, 4)
+COLUMNS = ("suite", "seed", "budget", "logged_steps", "stepped_steps", "success", "score", "J",
+           "J_ref", "gap", "wall_seconds")
+CURVE_FILE = re.compile(r"^(?P<method>.+)-seed(?P<seed>\d+)-curve\.csv$")
+
+
+def run_root(seed: int) -> int:
+    """The root seed of data seed ``seed`` (the ``train`` command's)."""
+    return 500_000 + 1000 * seed
+
+
+def price_row(suite: Any, reference: list[dict[str, Any]], seed: int, budget: int,
+              ) -> dict[str, Any]:
+    """One CSV row: identify on ``suite`` with ``budget`` logged steps, score the controller."""
+    from pendulum_lqg.learn.closed_loop import identify_closed_loop
+    from pendulum_lqg.scoreboard.linear import controller_file, linear_rows
+    from pendulum_lqg.scoreboard.score import optimality_gap, success_figures
+    from pendulum_lqg.scoreboard.stats import failure_aware_figures
+
+    t0 = time.perf_counter()
+    final = identify_closed_loop(suite, root=run_root(seed), steps=budget)[-1]
+    wall = time.perf_counter() - t0
+    doc = controller_file("state_space", final.state_space, action_scale=1.0, env=suite.env,
+                          method="sysid-lqg", seed=seed)
+    rows = linear_rows(suite, doc, name=f"sysid-lqg seed {seed} ({budget:,} steps)", nthread=1)
+    fig, ref = success_figures(rows), success_figures(reference)
+    return {"suite": suite.name, "seed": seed, "budget": budget,
+            "logged_steps": final.logged_steps, "stepped_steps": final.stepped_steps,
+            "success": fig["success_rate"],
+            "score": failure_aware_figures(rows, reference)["score_mean"],
+            "J": fig["cost_mean"], "J_ref": ref["cost_mean"],
+            "gap": optimality_gap(rows, reference)["optimality_gap"],
+            "wall_seconds": round(wall, 1)}
+
+
+def _done(path: Path) -> list[dict[str, Any]]:
+    from pendulum_lqg.util.files import read_csv
+
+    rows = read_csv(path)
+    if rows and tuple(rows[0]) != COLUMNS:
+        raise ConfigError(f"--resume: {path}: expected the columns {', '.join(COLUMNS)}, got "
+                          f"{', '.join(rows[0])}")
+    return rows
+
+
+def run(out: Path, *, suites: Sequence[str], seeds: Sequence[int], budgets: Sequence[int],
+        resume: bool) -> list[dict[str, Any]]:
+    """Every (suite, seed, budget) row not yet in ``out``, ``out`` rewritten atomically after
+    each; seed by seed (a run stopped early has whole curves of its first seeds)."""
+    from pendulum_lqg.scoreboard import episodes as ep
+    from pendulum_lqg.scoreboard.suites import load_suite
+    from pendulum_lqg.util.files import atomic_write, rows_to_csv
+
+    rows = _done(out) if resume and out.is_file() else []
+    done = {(r["suite"], int(r["seed"]), int(r["budget"])) for r in rows}
+    loaded = {name: load_suite(name) for name in suites}
+    references: dict[str, list[dict[str, Any]]] = {}
+    for seed in seeds:
+        for budget in sorted(budgets):
+            for name, suite in loaded.items():
+                if (suite.name, seed, budget) in done:
+                    continue
+                if name not in references:
+                    references[name] = ep.policy_rows(suite, suite.reference, nthread=1)
+                row = price_row(suite, references[name], seed, budget)
+                rows.append(row)
+                atomic_write(out, rows_to_csv(rows))
+                print(f"{suite.name} seed {seed} budget {budget:,}: {row['logged_steps']:,} "
+                      f"logged, success {row['success']:.2f}, score {row['score']:.3f}, gap "
+                      f"{_fmt(row['gap'])} ({row['wall_seconds']} s)", file=sys.stderr, flush=True)
+    return rows
+
+
+def _fmt(x: Any) -> str:
+    return "—" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:+.4f}"
+
+
+def _number(x: Any) -> float:
+    return math.nan if x in (None, "", "None") else float(x)
+
+
+def summary(rows: list[dict[str, Any]], suite: str, key: str,
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(budgets, median, q25, q75)`` of ``key`` over the seeds, per budget (a budget caps the
+    logged steps; a run whose episodes fail early logs fewer)."""
+    budgets = sorted({int(r["budget"]) for r in rows if r["suite"] == suite})
+    out = np.full((3, len(budgets)), np.nan)
+    for i, b in enumerate(budgets):
+        values = np.array([_number(r[key]) for r in rows
+                           if r["suite"] == suite and int(r["budget"]) == b])
+        if np.isfinite(values).any():
+            out[:, i] = np.nanpercentile(values, [50, 25, 75])
+    return np.array(budgets, dtype=float), out[0], out[1], out[2]
+
+
+def gap_slope(rows: list[dict[str, Any]], suite: str) -> tuple[float, float, int]:
+    """``(slope, intercept, budgets)`` of the least-squares line through ``log median gap``
+    against ``log budget``, over the budgets whose median gap is positive."""
+    steps, med, _, _ = summary(rows, suite, "gap")
+    keep = np.isfinite(med) & (med > 0)
+    if keep.sum() < 2:
+        return math.nan, math.nan, int(keep.sum())
+    slope, intercept = np.polyfit(np.log(steps[keep]), np.log(med[keep]), 1)
+    return float(slope), float(intercept), int(keep.sum())
+
+
+def read_curves(folder: Path) -> dict[str, list[dict[str, np.ndarray]]]:
+    """``{method: [run columns]}`` of the ``METHOD-seedS-curve.csv`` files in ``folder``."""
+    from pendulum_lqg.util.files import read_csv
+
+    out: dict[str, list[dict[str, np.ndarray]]] = {}
+    for path in sorted(folder.glob("*-curve.csv")):
+        match = CURVE_FILE.match(path.name)
+        rows = read_csv(path) if match else []
+        if rows and {"env_steps", "score_mean"} <= set(rows[0]):
+            out.setdefault(match["method"] if match else "", []).append(
+                {k: np.array([_number(r[k]) for r in rows]) for k in ("env_steps", "score_mean")})
+    return out
+
+
+def _rl_curve(ax: Any, method: str, runs: list[dict[str, np.ndarray]]) -> None:
+    """Median and IQR across runs of the score against env steps, each run interpolated (in
+    log steps) inside its own range."""
+    lo = max(min(r["env_steps"].min() for r in runs), 1.0)
+    grid = np.geomspace(lo, max(r["env_steps"].max() for r in runs), 60)
+    table = np.array([np.where((grid >= r["env_steps"].min()) & (grid <= r["env_steps"].max()),
+                               np.interp(np.log(grid), np.log(np.maximum(r["env_steps"], 1.0)),
+                                         r["score_mean"]), np.nan) for r in runs])
+    seen = np.isfinite(table).sum(axis=0) >= 1
+    q = np.nanpercentile(table[:, seen], [50, 25, 75], axis=0)
+    line, = ax.plot(grid[seen], q[0], lw=1, ls="--", label=f"{method} ({len(runs)} seeds)")
+    ax.fill_between(grid[seen], q[1], q[2], color=line.get_color(), alpha=0.1)
+
+
+def draw(rows: list[dict[str, Any]], curves: dict[str, list[dict[str, np.ndarray]]],
+         path: Path) -> dict[str, tuple[float, float, int]]:
+    """The figure (module docstring) to ``path``; each suite's gap slope."""
+    from matplotlib.figure import Figure
+
+    suites = [s for s in SUITES if any(r["suite"] == s for r in rows)] or \
+        sorted({str(r["suite"]) for r in rows})
+    fig = Figure(figsize=(5.0 * len(suites), 8.0), layout="constrained")
+    axes = np.array(fig.subplots(2, len(suites), squeeze=False))
+    slopes = {}
+    for col, suite in enumerate(suites):
+        steps, med, q25, q75 = summary(rows, suite, "score")
+        top, bottom = axes[0, col], axes[1, col]
+        top.plot(steps, med, "o-", color="k", label="sysid-lqg (closed loop)")
+        top.fill_between(steps, q25, q75, color="k", alpha=0.15)
+        if suite == "lecture":
+            for method, runs in sorted(curves.items()):
+                _rl_curve(top, method, runs)
+        top.axhline(1.0, color="grey", lw=0.8)
+        top.set(xscale="log", ylim=(-0.02, 1.08), title=suite, ylabel="failure-aware score",
+                xlabel="logged env steps (sysid-lqg: the budget; RL: env steps)")
+        top.legend(fontsize=7, loc="lower right")
+        steps, med, q25, q75 = summary(rows, suite, "gap")
+        slope, intercept, count = slopes[suite] = gap_slope(rows, suite)
+        pos = np.isfinite(med) & (med > 0)
+        bottom.plot(steps[pos], med[pos], "o-", color="k", label="median gap J/J* − 1")
+        band = np.isfinite(q25) & (q25 > 0)
+        bottom.fill_between(steps[band], q25[band], q75[band], color="k", alpha=0.15)
+        if count >= 2:
+            x = steps[pos]
+            bottom.plot(x, np.exp(intercept) * x ** slope, color="C3",
+                        label=f"fit: slope {slope:.2f}")
+            bottom.plot(x, med[pos][0] * (x / x[0]) ** -1.0, color="C0", ls=":", label="1/N")
+        bottom.set(xscale="log", yscale="log", ylabel="gap J/J* − 1 (positive part)",
+                   xlabel="logged env-step budget")
+        bottom.legend(fontsize=7)
+    fig.suptitle("The price of not knowing the model: closed-loop identification + LQG\n"
+                 "(median and IQR over data seeds; each suite's 100 episodes)", fontsize=10)
+    fig.savefig(path, dpi=120)
+    return slopes
+
+
+def _int_list(text: str, what: str) -> list[int]:
+    try:
+        values = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ConfigError(f"--{what}: expected comma-separated integers, got {text!r}") from None
+    if not values or min(values) < 0:
+        raise ConfigError(f"--{what}: expected non-negative integers, got {text!r}")
+    return values
+
+
+def _parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="python -m pendulum_lqg.learn.price",
+                                 description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run", help="identify and score every suite × seed × budget → CSV")
+    r.add_argument("--out", type=Path, required=True, help="the CSV to write")
+    r.add_argument("--suites", default=",".join(SUITES), help="comma-separated suite names")
+    r.add_argument("--seeds", default=",".join(map(str, SEEDS)), help="comma-separated seeds")
+    r.add_argument("--budgets", default=",".join(map(str, BUDGETS)),
+                   help="comma-separated budgets [logged env steps]")
+    how = r.add_mutually_exclusive_group()
+    how.add_argument("--force", action="store_true", help="replace an existing --out")
+    how.add_argument("--resume", action="store_true", help="keep --out's rows, add the missing")
+    f = sub.add_parser("figure", help="the figure of a price CSV → PNG; prints the gap slopes")
+    f.add_argument("csv", type=Path)
+    f.add_argument("--out", type=Path, required=True, help="the PNG to write")
+    f.add_argument("--curves", type=Path, default=Path("experiments/agents/models"),
+                   help="folder of the deep-RL methods' METHOD-seedS-curve.csv")
+    f.add_argument("--force", action="store_true", help="replace an existing --out")
+    return ap
+
+
+def _main(args: argparse.Namespace) -> int:
+    from pendulum_lqg.util.files import output_file, read_csv
+
+    out = output_file("--out", args.out)
+    if out.exists() and not args.force and not getattr(args, "resume", False):
+        raise ConfigError(f"--out: {out} exists; give --force to replace it"
+                          + (" or --resume to continue it" if args.command == "run" else ""))
+    if args.command == "run":
+        budgets = _int_list(args.budgets, "budgets")
+        if min(budgets) < 1:
+            raise ConfigError(f"--budgets: expected positive integers, got {args.budgets!r}")
+        rows = run(out, suites=[s for s in args.suites.split(",") if s],
+                   seeds=_int_list(args.seeds, "seeds"), budgets=budgets, resume=args.resume)
+        print(f"wrote {out} ({len(rows)} rows)")
+        return 0
+    if not args.csv.is_file():
+        raise ConfigError(f"csv: {args.csv}: no such file")
+    rows = read_csv(args.csv)
+    if not rows or tuple(rows[0]) != COLUMNS:
+        raise ConfigError(f"csv: {args.csv}: expected the columns {', '.join(COLUMNS)}")
+    curves = read_curves(args.curves) if args.curves.is_dir() else {}
+    curves = {m: runs for m, runs in curves.items() if not m.startswith("sysid")}
+    for suite, (slope, _, count) in draw(rows, curves, out).items():
+        print(f"{suite}: gap slope {slope:.2f} over {count} budgets (1/N: −1)")
+    print(f"wrote {out}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        return _main(args)
+    except PendulumLQGError as exc:
+        print(f"error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

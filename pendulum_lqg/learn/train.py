@@ -1,0 +1,157 @@
+"""``pendulum-lqg train METHOD --seed S``: one run, every input checked before any training.
+
+:func:`train` is the library's entry (the command calls it): the method named, the numbers in
+range, the options that apply to the method, the extra it needs installed, the suite loadable and
+the run folder fit to write in (a folder or a new path; its run files replaced only with
+``force``, continued only with ``resume`` where a checkpoint exists) — each a one-line
+:class:`~pendulum_lqg.errors.ConfigError` naming the option — then the method's trainer.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.learn.methods import METHODS, RL_EXTRA, MethodInfo
+from pendulum_lqg.learn.runs import RunContext, check_out_folder, default_out
+
+#: Ceilings checked before training: env steps of one run and the history length (3K inputs).
+MAX_STEPS, MAX_FRAMES = 10**10, 1024
+CHECKPOINT = "-checkpoint.json"
+
+
+def _integer(flag: str, value: Any, low: int, high: int) -> int:
+    """``value`` as an integer in ``[low, high]`` (a string from the command line accepted)."""
+    try:
+        number = int(str(value), 10) if not isinstance(value, bool) else None
+    except ValueError:
+        number = None
+    if number is None or not low <= number <= high:
+        raise ConfigError(f"{flag}: expected an integer from {low:,} to {high:,}, got {value!r}")
+    return number
+
+
+def _real(flag: str, value: Any, *, positive: bool) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if not math.isfinite(number) or number < 0 or (positive and number == 0):
+        raise ConfigError(f"{flag}: expected a finite number {'> 0' if positive else '≥ 0'}, "
+                          f"got {value!r}")
+    return number
+
+
+def check_options(info: MethodInfo, options: dict[str, Any]) -> dict[str, Any]:
+    """The method's options checked: each given one applies to the method, and is in range."""
+    given = {k: v for k, v in options.items() if v is not None}
+    for key in given:
+        if key not in info.options:
+            takes = ", ".join("--" + o.replace("_", "-") for o in info.options) or "none"
+            raise ConfigError(f"--{key.replace('_', '-')}: does not apply to {info.name} (its "
+                              f"options: {takes})")
+    out: dict[str, Any] = {}
+    for key, value in given.items():
+        if key == "frames":
+            out[key] = _integer("--frames", value, 1, MAX_FRAMES)
+        elif key == "eval_every":
+            out[key] = _integer("--eval-every", value, 1, MAX_STEPS)
+        elif key in ("alpha", "nu"):
+            out[key] = _real(f"--{key}", value, positive=True)
+        elif key == "noise_scale":
+            out[key] = _real("--noise-scale", value, positive=False)
+        elif key == "init":
+            out[key] = Path(value)
+    return out
+
+
+def check_extra(info: MethodInfo) -> None:
+    """The libraries an SB3 method imports, installed, or one line saying which extra to add."""
+    import importlib.util
+
+    if info.extra is None:
+        return
+    needed = ["torch", "stable_baselines3"] + (["sb3_contrib"] if "Recurrent" in info.what else [])
+    missing = [lib for lib in needed if importlib.util.find_spec(lib) is None]
+    if missing:
+        raise ConfigError(f"{info.name}: needs the {info.extra} extra ({', '.join(missing)} not "
+                          f"installed): {RL_EXTRA}")
+
+
+def train(method: str, *, seed: Any, suite: str | None = None, steps: Any = None,
+          out: str | Path | None = None, force: bool = False, resume: bool = False,
+          options: dict[str, Any] | None = None,
+          log: Callable[[str], None] | None = None) -> tuple[RunContext, list[Path]]:
+    """Check everything, then train run ``seed`` of ``method``; the run's context and the files
+    written. ``options``: ``frames``, ``alpha``, ``nu``, ``eval_every``, ``noise_scale``,
+    ``init`` (those the method takes; :data:`~pendulum_lqg.learn.methods.METHODS`)."""
+    ctx = prepare(method, seed=seed, suite=suite, steps=steps, out=out, force=force,
+                  resume=resume, options=options, log=log)
+    return ctx, run(ctx)
+
+
+def prepare(method: str, *, seed: Any, suite: str | None = None, steps: Any = None,
+            out: str | Path | None = None, force: bool = False, resume: bool = False,
+            options: dict[str, Any] | None = None,
+            log: Callable[[str], None] | None = None) -> RunContext:
+    """The run's context, every input checked (nothing trained, nothing written)."""
+    from pendulum_lqg.learn.deep import method_name
+    from pendulum_lqg.scoreboard.suites import load_suite
+
+    info = METHODS.get(method)
+    if info is None:
+        raise ConfigError(f"method: expected one of {', '.join(METHODS)}, got {method!r} "
+                          "(pendulum-lqg train --list)")
+    seed = _integer("--seed", seed, 0, 10**6)
+    steps = None if steps is None else _integer("--steps", steps, 1, MAX_STEPS)
+    opts = check_options(info, options or {})
+    if force and resume:
+        raise ConfigError("--resume: give either --force (start again) or --resume, not both")
+    if resume and out is None:
+        raise ConfigError("--resume: needs the --out DIR of the run to continue")
+    check_extra(info)
+    loaded = load_suite(suite or info.suite).with_noise_scale(opts.get("noise_scale"))
+    name = method_name(method, opts.get("noise_scale"))
+    folder = Path(out) if out is not None else default_out(name, seed)
+    check_out_folder(folder, f"{name}-seed{seed}", force=force, resume=resume,
+                     checkpoint=CHECKPOINT)
+    ctx = RunContext(method=name, seed=seed, suite=loaded, out=folder, steps=steps,
+                     eval_every=opts.get("eval_every", 50_000), resume=resume, options=opts)
+    ctx.options["kind"], ctx.options["base"] = info.kind, method
+    if log is not None:
+        ctx.log = log
+    return ctx
+
+
+def run(ctx: RunContext) -> list[Path]:
+    """Train the prepared run (:func:`prepare`). A run started again (``--force``) first drops
+    the checkpoints of the run it replaces, so that a later ``--resume`` can only continue it."""
+    ctx.out.mkdir(parents=True, exist_ok=True)
+    if not ctx.resume:
+        for old in ctx.out.glob(f"{ctx.name}-checkpoint*"):
+            if old.is_file():
+                old.unlink()
+    kind = ctx.options["kind"]
+    if kind == "sb3":
+        from pendulum_lqg.learn.deep import METHODS as SB3
+        from pendulum_lqg.learn.deep import train_sb3
+
+        return train_sb3(ctx, SB3[ctx.options["base"]])
+    if kind == "ars":
+        from pendulum_lqg.learn.ars import train_ars
+
+        return train_ars(ctx)
+    if kind == "clone":
+        from pendulum_lqg.learn.clone import train_clone
+
+        return train_clone(ctx)
+    if kind == "sysid-lqg":
+        from pendulum_lqg.learn.sysid_lqg import train_sysid_lqg
+
+        return train_sysid_lqg(ctx)
+    from pendulum_lqg.learn.openloop import train_openloop
+
+    return train_openloop(ctx)
