@@ -12,7 +12,7 @@ import pytest
 from pendulum_lqg.cli import main
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.lti import load_lti, lti_from_mapping
-from pendulum_lqg.policies.lti import design_lti_policy, lti_theory
+from pendulum_lqg.policies.lti import design_lti_policy, lti_scenario, lti_theory
 
 EXPERIMENTS = Path(__file__).resolve().parents[1] / "experiments" / "lti"
 
@@ -72,10 +72,13 @@ def test_theory_cli_on_the_double_integrator(capsys):
 
 
 @pytest.mark.parametrize("table, message", [
-    ({"control_period": 0.1, "A": [[0, 1], [0, 0]]}, "A and B are required together"),
-    ({"control_period": 0.1, "A": [[0, 1]], "B": [[0], [1]]}, "A: expected shape"),
+    ({"control_period": 0.1, "A": [[0, 1], [0, 0]]}, "B: missing \\(A and B go together\\)"),
+    ({"control_period": 0.1, "A": [[0, 1]], "B": [[0], [1]]}, r"A: expected a \(1 × 1\) .*"
+                                                             r"got shape \(1, 2\)"),
     ({"control_period": 0.1, "A": [[0]], "B": [[1]], "Phi": [[1]]}, "either A and B"),
-    ({"control_period": 0.1, "A": [[0]], "B": [[1]], "W": [-1]}, "W: expected 1 finite"),
+    ({"control_period": 0.1, "A": [[0]], "B": [[1]], "W": [-1]}, "W: expected a symmetric "
+                                                              "positive semidefinite matrix, got "
+                                                              "smallest eigenvalue -1"),
     ({"control_period": 0.1, "A": [[0]], "B": [[1]], "bogus": 1}, "unknown key 'bogus'"),
     ({"control_period": -1, "A": [[0]], "B": [[1]]}, "control_period"),
 ])
@@ -126,7 +129,7 @@ def test_run_cli_on_the_double_integrator_gives_run_episodes_rows(capsys):
 
 @pytest.mark.parametrize("extra, message", [
     (["--theta0", "0.2"], "--theta0: not with --lti"),
-    (["--plot", "x.png"], "--plot: not with --lti"),
+    (["--record", "x.rrd"], "--record: not with --lti"),
     (["--plant", "linear-euler"], "--plant: an LTI plant runs"),
     (["--policy", "plug.py:make"], "--policy: with --lti, a built-in"),
     (["--dt", "0.05"], "--dt: the LTI plant 'double_integrator' is sampled at 0.01 s"),
@@ -180,3 +183,76 @@ def test_bench_lti_experiment_refuses_the_cartpoles_keys(tmp_path, extra, messag
     path.write_text(f'lti_file = "{EXPERIMENTS / "double_integrator.toml"}"\n' + extra)
     with pytest.raises(ConfigError, match=message):
         load_spec(str(path))
+
+
+# ---- design --lti -------------------------------------------------------------------------------
+def test_design_lti_double_integrator_gives_the_textbook_gains(capsys):
+    """K = [1, √2] (LQR with Q = CᵀC, R = 1) and L = [√3, 1]ᵀ (Kalman–Bucy with W = I₂ and the
+    measurement density V·T = 1): docs/theory.md §5.2."""
+    import json
+
+    assert main(["design", "--lti", str(EXPERIMENTS / "double_integrator.toml"), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    np.testing.assert_allclose(d["K_lqr"], [[1.0, math.sqrt(2)]], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(d["L_kalman"], [[math.sqrt(3)], [1.0]], rtol=0, atol=1e-9)
+    assert d["states"] == ["position", "velocity"] and d["inputs"] == ["u1"]
+    assert d["separation"]["continuous_max_error"] < 1e-12
+    assert d["separation"]["discrete_max_error"] < 1e-12
+    # the discrete gains are the ones run --lti's policies use
+    for name, key in (("dlqr+kalman", "L_dkalman"), ("dlqr+luenberger", "L_dluenberger")):
+        policy = design_lti_policy(load_lti(EXPERIMENTS / "double_integrator.toml"), name)
+        np.testing.assert_allclose(policy.K, d["K_dlqr"], rtol=1e-12)
+        np.testing.assert_allclose(policy.info["L"], d[key], rtol=1e-12)
+
+
+def test_design_lti_of_a_discrete_plant_has_only_the_discrete_designs(capsys):
+    import json
+
+    assert main(["design", "--lti", str(EXPERIMENTS / "ogata_discrete.toml"), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    np.testing.assert_allclose(d["K_dlqr"], [[1.0, 0.7913]], atol=1e-4)     # Ogata's table
+    assert "K_lqr" not in d and "A" not in d and "continuous_max_error" not in d["separation"]
+    assert main(["design", "--lti", str(EXPERIMENTS / "ogata_discrete.toml")]) == 0
+    out = capsys.readouterr().out
+    assert "Discrete LQR" in out and "Continuous LQR" not in out
+
+
+@pytest.mark.parametrize("extra", [["--q", "1,1"], ["--dt", "0.02"], ["--model", "x.xml"]])
+def test_design_lti_refuses_the_cartpoles_options(capsys, extra):
+    path = str(EXPERIMENTS / "double_integrator.toml")
+    assert main(["design", "--lti", path, *extra]) == 2
+    assert f"{extra[0]}: not with --lti" in capsys.readouterr().err
+
+
+# ---- pictures of any plant ----------------------------------------------------------------------
+@pytest.mark.parametrize("file, labels", [
+    ("double_integrator.toml", ["position", "velocity", "y1", "u1"]),
+    ("two_mass.toml", ["p1", "p2", "v1", "v2", "y1", "y2", "f1", "f2"]),
+])
+def test_episode_figure_of_an_lti_plant_has_a_panel_per_state_output_and_input(file, labels):
+    """n + p + m panels, each labelled with the file's name; the input panels draw the limit in
+    force (the two-mass file's ±5 N per motor) and the output panels y and C x."""
+    from pendulum_lqg.analysis.episode_plot import plot_episode
+    from pendulum_lqg.core.runner import run_episodes
+
+    plant = load_lti(EXPERIMENTS / file)
+    sc = lti_scenario(plant, duration=1.0)
+    tr = run_episodes(plant, sc, design_lti_policy(plant, "dlqr+kalman"), seed=0, episodes=[0],
+                      trajectory=True).trajectories[0]
+    fig = plot_episode(tr, plant=plant, scenario=sc)
+    assert [ax.get_ylabel() for ax in fig.axes] == labels
+    n, p = plant.n_states, plant.n_outputs
+    for j, ax in enumerate(fig.axes[n + p:]):
+        limits = sorted(line.get_ydata()[0] for line in ax.lines if line.get_linestyle() == "--")
+        assert limits == ([-5.0, 5.0] if file == "two_mass.toml" else [])
+        np.testing.assert_array_equal(ax.lines[-1 - len(limits)].get_ydata(),
+                                      np.asarray(tr.u).reshape(len(tr.t), -1)[:, j])
+    np.testing.assert_array_equal(fig.axes[n].lines[1].get_ydata(), tr.y_true[:, 0])
+
+
+def test_run_lti_plot_writes_the_picture(tmp_path, capsys):
+    path = tmp_path / "two.png"
+    assert main(["run", "--lti", str(EXPERIMENTS / "two_mass.toml"), "--episodes", "2",
+                 "--duration", "1", "--plot", str(path)]) == 0
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"plot: {path} (episode 0)" in capsys.readouterr().err

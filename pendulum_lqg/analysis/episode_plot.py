@@ -60,7 +60,8 @@ def state_labels(n: int) -> tuple[str, ...]:
 
 def plot_episode(trajectory: Trajectory, *, plant: Plant | None = None,
                  scenario: Scenario | None = None, title: str | None = None) -> Figure:
-    """A figure of one episode: a panel per state, then the measurement y and the force u.
+    """A figure of one episode: a panel per state, then the measurement y and the force u (a plant
+    given as matrices: a panel per state, per output and per input, named by its file).
 
     Parameters
     ----------
@@ -74,8 +75,10 @@ def plot_episode(trajectory: Trajectory, *, plant: Plant | None = None,
     -------
     matplotlib.figure.Figure
         ``n + 2`` axes in reading order, ``n`` the number of states: ``fig.axes[i]`` is state
-        ``i`` (y-label from :func:`state_labels`), then ``"y"`` and ``"u [N]"``. Save it with
-        ``fig.savefig(path)``; in Jupyter it shows inline as the cell's value.
+        ``i`` (y-label from :func:`state_labels`), then ``"y"`` and ``"u [N]"``; for an
+        :class:`~pendulum_lqg.model.lti.LTIPlant` ``n + p + m`` axes labelled with its state,
+        output and input names (:func:`_plot_lti`). Save it with :func:`save_episode_plot`; in
+        Jupyter it shows inline as the cell's value.
     """
     import matplotlib
 
@@ -84,6 +87,8 @@ def plot_episode(trajectory: Trajectory, *, plant: Plant | None = None,
     if t.ndim != 1 or t.size == 0 or x.shape[0] != t.size:
         raise ConfigError(f"trajectory: expected sample times t (N,) and states x (N, n) with "
                           f"N ≥ 1, got t {t.shape} and x {x.shape}")
+    if getattr(plant, "is_lti", False):
+        return _plot_lti(trajectory, plant, scenario, title)
     n = x.shape[1]
     labels = state_labels(n)
     limits, u_max = _limits(plant, scenario, n)
@@ -234,3 +239,71 @@ def episode_title(tr: Trajectory) -> str:
         if t_fail is not None:
             outcome += f" at t = {t_fail:.3g} s"
     return f"episode {tr.episode} (seed {tr.seed}): {outcome}"
+
+
+def _plot_lti(tr: Trajectory, plant: Any, scenario: Scenario | None, title: str | None) -> Figure:
+    """The figure of an LTI plant's episode: ``n`` state panels (x, x̂ ± 2σ, the state's failure
+    limit), ``p`` output panels (y and the noise-free ``C x``), ``m`` input panels (u applied, u
+    asked where it differs, the input's limit in force), two columns, each labelled with the
+    plant's names."""
+    import matplotlib
+
+    from pendulum_lqg.core.rules import limits
+
+    t = np.asarray(tr.t, dtype=float)
+    names = plant.state_names, plant.output_names, plant.input_names
+    n, p, m = (len(v) for v in names)
+    u_max = (limits(plant, scenario)[2] if scenario is not None else plant.u_max)
+    u_lim = np.broadcast_to(np.asarray(u_max, dtype=float), (m,))
+    s_lim = (np.full(n, math.inf) if plant.state_limits is None
+             else np.asarray(plant.state_limits, dtype=float))
+    y = np.asarray(tr.y, dtype=float).reshape(t.size, -1)
+    y_true = np.asarray(tr.y_true, dtype=float).reshape(t.size, -1)
+    u = np.asarray(tr.u, dtype=float).reshape(t.size, -1)
+    asked = getattr(tr, "u_policy", None)
+    asked = None if asked is None else np.asarray(asked, dtype=float).reshape(t.size, -1)
+    ncol = 2 if n + p + m > 3 else 1
+    nrow = -(-(n + p + m) // ncol)
+    with matplotlib.rc_context(_STYLE):
+        fig = _inline_figure_class()(figsize=(11.0 if ncol == 2 else 7.0, 2.0 * nrow + 0.6),
+                                     layout="constrained")
+        axes = list(fig.subplots(nrow, ncol, sharex=True, squeeze=False).flat)
+        for i in range(n):
+            lim = float(s_lim[i])
+            _state_panel(axes[i], tr, i, names[0][i], lim if math.isfinite(lim) else None)
+        for j in range(p):
+            ax = axes[n + j]
+            ax.plot(t, y[:, j], marker=".", ms=2, lw=0.5, color="tab:orange", label="y (measured)")
+            ax.plot(t, y_true[:, j], color="k", lw=0.9, label="C x (noise-free)")
+            ax.set_ylabel(names[1][j])
+            ax.legend(loc="upper right")
+        for j in range(m):
+            ax = axes[n + p + j]
+            if asked is not None and not np.allclose(asked[:, j], u[:, j]):
+                ax.step(t, asked[:, j], where="post", color="tab:gray", lw=0.8,
+                        label="u asked by the policy")
+            ax.step(t, u[:, j], where="post", color="tab:green", label="u applied")
+            if math.isfinite(u_lim[j]):
+                for sgn in (-1.0, 1.0):
+                    ax.axhline(sgn * u_lim[j], color="tab:red", lw=0.9, ls="--",
+                               label="saturation" if sgn > 0 else None)
+            ax.set_ylabel(names[2][j])
+            ax.legend(loc="upper right")
+        _finish_axes(fig, axes, n + p + m, ncol, tr)
+        fig.suptitle(title if title is not None else episode_title(tr))
+        axes[0].legend(loc="upper right")
+    return fig
+
+
+def _finish_axes(fig: Figure, axes: list[Any], used: int, ncol: int, tr: Trajectory) -> None:
+    """Remove the unused axes, put the time axis under the bottom panel of each column and mark
+    the failure time on every panel."""
+    for ax in axes[used:]:
+        fig.delaxes(ax)
+    for ax in axes[max(used - ncol, 0):used]:
+        ax.xaxis.set_tick_params(labelbottom=True)
+        ax.set_xlabel("t [s]")
+    end = _failure_time(tr)
+    if end is not None:
+        for ax in axes[:used]:
+            ax.axvline(end, color="tab:red", lw=0.8, ls=":")

@@ -135,9 +135,12 @@ def lti_theory_entry(cfg: Any) -> dict[str, Any] | None:
     for s in plant.state_names:
         out[f"rms_{s}"] = res.rms[s]
         out[f"rms_est_err_{s}"] = res.estimate_error_std[s]
-    out.update(rms_u=res.u_std, cost_rate=res.cost_rate, cost_J=res.cost_J, verdict=res.verdict)
+    if plant.n_inputs == 1:             # the theory's u_std is one input's
+        out["rms_u"] = res.u_std
+    out.update(cost_rate=res.cost_rate, cost_J=res.cost_J, verdict=res.verdict)
     ep = res.episode                 # expected over the episode from x₀, x̂₀ (after the burn-in)
-    out["episode"] = {**{f"rms_{s}": v for s, v in ep.rms.items()}, "rms_u": ep.u_rms,
+    out["episode"] = {**{f"rms_{s}": v for s, v in ep.rms.items()},
+                      **({"rms_u": ep.u_rms} if plant.n_inputs == 1 else {}),
                       **{f"rms_est_err_{s}": v for s, v in ep.estimate_error_rms.items()},
                       "cost_J": ep.cost_J, "burn_in": ep.burn_in}
     return out

@@ -391,9 +391,12 @@ def _lti_markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
     cfg0 = spec.configurations[0]
     fields = config_fields(cfg0)
     states = [f.removeprefix("rms_est_err_") for f in fields if f.startswith("rms_est_err_")]
+    inputs = [f.removeprefix("rms_") for f in fields if f.startswith("rms_")    # u, or m names
+              and not f.startswith("rms_est_err_") and f.removeprefix("rms_") not in states]
     keys = list(cfg0.values)
     head = [*keys, "success [95 % CI]", "J (successes)",
-            *(h for s in states for h in (f"RMS {s}", "theory")), "RMS u", "theory", "saturated",
+            *(h for s in states for h in (f"RMS {s}", "theory")),
+            *(h for u in inputs for h in (f"RMS {u}", "theory")), "saturated",
             *(h for s in states for h in (f"RMS error {s}", "theory")), "loop radius",
             "failures"]
     lines = [f"**{spec.name}** — LTI plant `{Path(str(cfg0.lti_file)).name}`, {spec.episodes} "
@@ -410,8 +413,9 @@ def _lti_markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
             f"{s['success_rate']:.1%} [{lo:.1%}, {hi:.1%}]", _stat_cell(s["cost"])]
         for prefix in ("rms_", None, "rms_est_err_"):
             if prefix is None:
-                cells += [_stat_cell(s["rms_u"]), _theory_cell(th, "rms_u"),
-                          f"{s['saturated_fraction']['mean']:.1%}"]
+                for u in inputs:
+                    cells += [_stat_cell(s[f"rms_{u}"]), _theory_cell(th, f"rms_{u}")]
+                cells.append(f"{s['saturated_fraction']['mean']:.1%}")
                 continue
             for name in states:
                 cells += [_stat_cell(s[prefix + name]), _theory_cell(th, prefix + name)]

@@ -87,12 +87,16 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def _run_lti(args: argparse.Namespace, name: str) -> int:
-    """``run --lti FILE``: the episodes of policy ``name`` on the file's plant, and the theory."""
+    """``run --lti FILE``: the episodes of policy ``name`` on the file's plant, and the theory;
+    with ``--plot``, the picture of one episode."""
     from pendulum_lqg.cli.lti import lti_report, lti_run_setup
 
     lti, lti_sc, lti_policy, lti_config = lti_run_setup(args, name)
+    _check_plot_args(args)
     with _watchdog(args):
         lti_res = _run_in_batches(lti, lti_sc, lti_policy, args, trajectory=False)
+    if args.plot is not None:
+        _plot_episode(lti, lti_sc, lti_policy, args, None)
     th = run_theory_lines(lti, lti_sc, lti_policy)
     return lti_report(args, lti_config, lti_sc, lti_res.rows, theory=th)
 

@@ -25,7 +25,6 @@ _CARTPOLE_ONLY = {"model": (None, "the file is the plant"), "theta0": (defaults.
                   "track_limit": (None, "the file's state_limits"),
                   "record": (None, "recordings draw the cart-pole"),
                   "spawn": (False, "recordings draw the cart-pole"),
-                  "plot": (None, "the picture draws the cart-pole's states"),
                   "randomize": (None, "it randomises the cart-pole's model")}
 
 
@@ -90,7 +89,10 @@ def lti_report(args: argparse.Namespace, config: dict[str, Any], scenario: Any,
     return 0
 
 
-def _limit(value: float) -> float | str:
+def _limit(value: Any) -> Any:
+    """A limit for the configuration: ``"inf"`` for none; one per input as a list."""
+    if np.ndim(value):
+        return [_limit(v) for v in np.asarray(value).tolist()]
     return "inf" if math.isinf(value) else value
 
 

@@ -209,9 +209,15 @@ def add_burn_in_option(p: argparse.ArgumentParser) -> None:
 def _add_design_parser(sub: Any) -> None:
     """The ``design`` subcommand."""
     p = sub.add_parser("design", help="print the linearisation and every controller/observer design",
-                       description="Linearise the MuJoCo cart-pole about the upright and print "
+                       description="Linearise the MuJoCo cart-pole about the upright (or read "
+                                   "a plant given as matrices, --lti) and print "
                                    "continuous/discrete LQR, Kalman and Luenberger designs.")
     _add_design_options(p)
+    p.add_argument("--lti", default=None, metavar="FILE",
+                   help="a plant given as matrices (TOML or .npz, e.g. "
+                        "experiments/lti/double_integrator.toml) instead of the cart-pole: its "
+                        "discretisation and every design on the file's weights and noise "
+                        "(default: the cart-pole)")
     p.add_argument("--json", action="store_true",
                    help="machine-readable output (matrices as nested lists, poles as [re, im])")
 

@@ -7,10 +7,10 @@ The one loop (:class:`~pendulum_lqg.core.loop.Simulator`) steps two kinds of pla
   initial state, noise densities and cost weights, and the failure rule of the pole's angle and the
   track (:func:`~pendulum_lqg.core.rules.detect_failure`);
 * a linear plant given as matrices (:class:`~pendulum_lqg.model.lti.LTIPlant`): ``n`` states and ``p``
-  outputs named by its file, ``y = C x + v``, its own initial state, noise covariances (the
-  state's jump over one period, ``Φ``-consistent, and V), diagonal cost weights and optional
-  per-state failure limits; the scenario contributes the duration, the noise scale and the
-  force limit, if it sets one.
+  outputs named by its file, ``y = C x + v``, ``m`` inputs, its own initial state, noise
+  covariances (the state's jump over one period, ``Φ``-consistent, and V), cost weights (diagonal,
+  or the full ``[[Q, N], [Nᵀ, R]]``) and optional per-state failure limits; the scenario
+  contributes the duration, the noise scale and the force limit, if it sets one.
 
 :func:`layout` turns either into one :class:`Layout`; nothing else in the core asks which kind of
 plant it runs.
@@ -49,6 +49,10 @@ class Layout:
     reported : the leading state columns with ``rms_*`` / ``max_abs_*`` metrics (cart-pole: p, θ)
     order : the order of their metric columns (cart-pole: θ first, as the results always had)
     settle : the column of the settling time, or ``None`` (an LTI plant has no pole angle)
+    inputs : names of u (m); one input's metrics are ``rms_u``, ``max_abs_u``, several inputs'
+        ``rms_NAME``, ``max_abs_NAME``
+    cost_matrix : ``[[Q, N], [Nᵀ, R]]`` (n+m, n+m) when the cost weights are not diagonal (an LTI
+        plant's full Q or cross term N), else ``None`` (``cost_Q``, ``cost_R`` are the diagonal)
     """
 
     states: tuple[str, ...]
@@ -63,6 +67,12 @@ class Layout:
     reported: int
     order: tuple[int, ...]
     settle: int | None
+    inputs: tuple[str, ...] = ("u",)
+    cost_matrix: np.ndarray | None = None
+
+    @property
+    def m(self) -> int:
+        return len(self.inputs)
 
     @property
     def n(self) -> int:
@@ -92,26 +102,27 @@ def layout(plant: Any, scenario: Scenario) -> Layout:
 
 def _lti_layout(plant: Any, scenario: Scenario) -> Layout:
     """An LTI plant's layout; refuses what its loop cannot run, one line naming the key."""
-    n = plant.n_states
-    if plant.Gamma.shape[1] != 1:
-        raise ConfigError(f"B: the loop runs plants with one input; {plant.name!r} has "
-                          f"{plant.Gamma.shape[1]}")
+    n, m = plant.n_states, plant.n_inputs
+    if m > 1 and (scenario.actuator_delay or scenario.actuator_tau > 0):
+        raise ConfigError(f"actuator_delay: the actuator's delay line and lag take one input; "
+                          f"{plant.name!r} has {m}")
     if scenario.plant != "linear-zoh":
         raise ConfigError(f"plant: an LTI plant runs as its own exact sampled model "
                           f"(plant = 'linear-zoh'), got {scenario.plant!r}")
     if not math.isclose(scenario.control_period, plant.control_period, rel_tol=1e-12):
         raise ConfigError(f"control_period: the LTI plant {plant.name!r} is sampled at "
                           f"{plant.control_period:g} s, got {scenario.control_period:g} s")
-    Q = np.asarray(plant.Q)
-    if np.any(Q != np.diag(np.diag(Q))):
-        raise ConfigError(f"Q: the simulated cost takes a diagonal Q; {plant.name!r} has "
-                          f"off-diagonal weights")
+    weight = np.block([[np.asarray(plant.Q), plant.cross_weight],
+                       [plant.cross_weight.T, np.asarray(plant.R)]])
+    diagonal = bool(np.all(weight == np.diag(np.diag(weight))))
     zeros = np.zeros(n)
     limits = plant.state_limits if plant.state_limits is not None else np.full(n, math.inf)
     return Layout(states=plant.state_names, outputs=plant.output_names,
                   x0=zeros if plant.x0 is None else np.asarray(plant.x0, dtype=float),
                   x0_std=zeros if plant.x0_std is None else np.asarray(plant.x0_std, dtype=float),
-                  C=np.asarray(plant.C, dtype=float), cost_Q=tuple(np.diag(Q).tolist()),
-                  cost_R=float(np.asarray(plant.R).reshape(-1)[0]), state_limits=limits,
+                  C=np.asarray(plant.C, dtype=float), cost_Q=tuple(np.diag(weight)[:n].tolist()),
+                  cost_R=float(weight[n, n]), state_limits=limits,
                   covariances=(plant.process_covariance(), np.asarray(plant.V, dtype=float)),
-                  reported=n, order=tuple(range(n)), settle=None)
+                  reported=n, order=tuple(range(n)), settle=None,
+                  inputs=("u",) if m == 1 else plant.input_names,
+                  cost_matrix=None if diagonal and m == 1 else weight)

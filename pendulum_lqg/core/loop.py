@@ -102,15 +102,20 @@ class Simulator:
         self.dt = self.k * self.h
         self.n_periods = scenario.n_periods
         _, self.track, self.u_max = rules.limits(plant, scenario)     # the limits in force
+        # what saturates u: u_max, or for an LTI plant of m inputs one limit per input (m,)
+        self.u_limit: float | np.ndarray = self.u_max
         self.layout = lay = layout(plant, scenario)
-        self.nx = lay.n
+        self.nx, self.m = lay.n, lay.m
+        if self.m > 1:                          # one limit per input (the scenario's: for all)
+            self.u_limit = np.broadcast_to(np.asarray(self.u_max, dtype=float), (self.m,)).copy()
+            self.u_max = float(np.max(self.u_limit))
         self._C, self._state_limits = lay.C, lay.state_limits
         self.noise = NoiseStream(scenario.noise, steps_per_period=self.k, dt=self.dt, h=self.h,
                                  covariances=lay.covariances)
         # The cost weights h·[diag(Q), R]: a period's cost is Σ weights·z² over its physics steps.
-        self.weights = rules.cost_weights(lay.cost_Q, lay.cost_R, self.h)
+        self.weights = rules.cost_weights(lay.cost_Q, lay.cost_R, self.h, matrix=lay.cost_matrix)
         self._bounds = rules.failure_bounds(theta_max=scenario.theta_max, track_limit=self.track,
-                                            u_max=self.u_max, state_limits=lay.state_limits)
+                                            u_max=self.u_limit, state_limits=lay.state_limits)
         self._force_noise = scenario.noise.process == "force" and self.noise.enabled
         self._state_noise = scenario.noise.process == "state" and self.noise.enabled
         self._nthread = thread_count(nthread)
@@ -160,7 +165,7 @@ class Simulator:
             return
         self._capacity = n
         self._make_physics()
-        self._period = PeriodBuffer(n, self.k, self._bounds)
+        self._period = PeriodBuffer(n, self.k, self._bounds, inputs=self.m)
 
     # ---- episodes ----------------------------------------------------------------------------
     def reset(self, generators: list[np.random.Generator], *, ids: np.ndarray | None = None,
@@ -206,7 +211,7 @@ class Simulator:
             if self._streamed:
                 self.metrics = MetricsAccumulator(
                     self.ids.max(initial=-1) + 1, h=self.h, k=self.k, weights=self.weights, u_max=
-                    self.u_max, settle_band=sc.settle_band, layout=lay, skip=sc.burn_in_periods)
+                    self.u_limit, settle_band=sc.settle_band, layout=lay, skip=sc.burn_in_periods)
             self._proc_noise = np.zeros((n, self.noise.n_proc))     # w of the period, per row
         else:
             rows = np.asarray(rows)
@@ -267,18 +272,18 @@ class Simulator:
 
         Parameters
         ----------
-        u : (n,) requested forces [N] (saturated here to the actuator range; a non-finite one
-            ends its episode as ``diverged``)
+        u : (n,) requested forces [N], or (n, m) inputs of an LTI plant of m inputs (saturated
+            here to the actuator range; a non-finite one ends its episode as ``diverged``)
         x_hat : (n, n_x) the estimate the controller used at this sample, for the estimation-error
             metric (optional)
         """
-        u = _real_forces(u)
+        u = _real_forces(u, self.m)
         if u.shape[0] != self.n:
             raise ConfigError(f"u: expected {self.n} forces, got {u.shape[0]}")
         bad = rules.nonfinite_forces(u)
-        if bad is not None:
-            u = np.where(bad, 0.0, u)            # the physics of that row runs with 0 N
-        requested = rules.saturate(u, self.u_max)
+        if bad is not None:                      # the physics of that row runs with 0 N
+            u = np.where(bad if u.ndim == 1 else bad[:, None], 0.0, u)
+        requested = rules.saturate(u, self.u_limit)
         v, command, reset = self._advance(requested)
         failed, reason, fail_step = rules.detect_failure(
             v, reset, self._theta_max, self.track, self._state_limits, bad_force=bad)
@@ -372,10 +377,14 @@ class Simulator:
         self.sensing.select(rows, self._physics)
 
 
-def _real_forces(u: object) -> np.ndarray:
-    """``u`` as a flat float64 array; a complex force is refused (its imaginary part would be
-    dropped silently)."""
+def _real_forces(u: object, m: int = 1) -> np.ndarray:
+    """``u`` as a flat float64 array (n,), or (n, m) for a plant of ``m`` inputs; a complex force
+    is refused (its imaginary part would be dropped silently)."""
     arr = np.asarray(u)
     if arr.dtype.kind == "c":
         raise PendulumLQGError(f"u: expected real forces [N], got complex values {arr.reshape(-1)[:3]!r}")
-    return np.asarray(arr, dtype=float).reshape(-1)
+    if m == 1:
+        return np.asarray(arr, dtype=float).reshape(-1)
+    if arr.ndim != 2 or arr.shape[1] != m:
+        raise PendulumLQGError(f"u: expected (n, {m}) inputs, got shape {arr.shape}")
+    return np.asarray(arr, dtype=float)

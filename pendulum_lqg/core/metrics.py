@@ -44,19 +44,21 @@ def est_fields(states: tuple[str, ...]) -> tuple[str, ...]:
 
 
 def episode_fields(reported: tuple[str, ...], states: tuple[str, ...], *,
-                   settle: bool) -> tuple[str, ...]:
+                   settle: bool, inputs: tuple[str, ...] = ("u",)) -> tuple[str, ...]:
     """The columns of one episode row: ``reported`` the states with RMS and max columns, in
-    order; ``states`` every state (the estimation errors); ``settle`` a settling-time column."""
+    order; ``states`` every state (the estimation errors); ``settle`` a settling-time column;
+    ``inputs`` the names of u (one input: ``u``), each with RMS and max columns."""
     per_state = [f"{kind}_{s}" for s in reported for kind in ("rms", "max_abs")]
+    per_input = [f"{kind}_{s}" for s in inputs for kind in ("rms", "max_abs")]
     return ("episode", "seed", "success", "failure_reason", "time_to_failure", "duration", "cost",
-            *per_state, "rms_u", "max_abs_u", "saturated_fraction", *est_fields(states),
+            *per_state, *per_input, "saturated_fraction", *est_fields(states),
             *(("settling_time",) if settle else ()))
 
 
 def layout_fields(layout: Layout) -> tuple[str, ...]:
     """The episode columns of a plant's :class:`~pendulum_lqg.core.layout.Layout`."""
     return episode_fields(tuple(layout.states[c] for c in layout.order), layout.states,
-                          settle=layout.settle is not None)
+                          settle=layout.settle is not None, inputs=layout.inputs)
 
 
 def summary_metrics(fields: tuple[str, ...]) -> tuple[str, ...]:
@@ -112,7 +114,7 @@ class MetricsAccumulator:
     fail_time: np.ndarray
     rms_alive: np.ndarray           # the alive time after the burn-in (used only with one)
 
-    def __init__(self, n: int, *, h: float, k: int, weights: np.ndarray, u_max: float,
+    def __init__(self, n: int, *, h: float, k: int, weights: np.ndarray, u_max: float | np.ndarray,
                  settle_band: float, layout: Layout | None = None, skip: int = 0) -> None:
         from pendulum_lqg.core.layout import CARTPOLE
 
@@ -125,6 +127,7 @@ class MetricsAccumulator:
         lay = CARTPOLE if layout is None else layout
         self.m, self.nx, self.order, self.settle_col = lay.reported, lay.n, lay.order, lay.settle
         self.names = tuple(lay.states[c] for c in lay.order)
+        self.inputs = lay.inputs
         self.fields = layout_fields(lay)
         self.est_fields = est_fields(lay.states)
         self._steps = np.arange(1, k + 1)[:, None]      # (k, 1): 1 … k, the settling-time index
@@ -136,6 +139,8 @@ class MetricsAccumulator:
             setattr(self, name, np.zeros(n))
         self.sq, self.peak = np.zeros((n, self.m)), np.zeros((n, self.m))
         self.est2 = np.zeros((n, self.nx))
+        if len(self.inputs) > 1:                   # per input: ∫ u_j² dt and max |u_j|
+            self.u2, self.max_u = np.zeros((n, len(self.inputs))), np.zeros((n, len(self.inputs)))
         self.reason = np.zeros(n, dtype=np.int8)
         self.done = np.zeros(n, dtype=bool)
         self.fail_time[:] = np.nan
@@ -182,9 +187,16 @@ class MetricsAccumulator:
             col = z[:, :, c]
             sq = h * np.einsum("nk,nk->n", col, col)
             _update(ids, self.sq[:, c], np.add, sq if keep is None else keep * sq)
-        u2 = u * u * t_alive
-        _update(ids, self.u2, np.add, u2 if keep is None else keep * u2)
-        _update(ids, self.sat, np.add, (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive)
+        if u.ndim == 1:
+            u2 = u * u * t_alive
+            _update(ids, self.u2, np.add, u2 if keep is None else keep * u2)
+            _update(ids, self.sat, np.add, (np.abs(u) >= self.u_max * (1 - 1e-12)) * t_alive)
+        else:                                      # (n, m): saturated when any input is
+            alive = np.asarray(t_alive)
+            u2 = u * u * (alive[:, None] if alive.ndim else alive)
+            _update(ids, self.u2, np.add, u2 if keep is None else keep[:, None] * u2)
+            _update(ids, self.sat, np.add,
+                    np.any(np.abs(u) >= self.u_max * (1 - 1e-12), axis=1) * t_alive)
         # |x_c| as (m, k, n), each component one contiguous block: the row maxima are then
         # one reduction over the middle axis with long inner loops (on the (n, k) views numpy
         # loops over k = 10 numbers at a time); a max is exact, so its order changes nothing
@@ -247,8 +259,10 @@ class MetricsAccumulator:
             for c, name in zip(self.order, self.names, strict=True):
                 columns[f"rms_{name}"] = np.sqrt(self.sq[ids, c] / rms_alive).tolist()
                 columns[f"max_abs_{name}"] = self.peak[ids, c].tolist()
-            columns["rms_u"] = np.sqrt(self.u2[ids] / rms_alive).tolist()
-            columns["max_abs_u"] = self.max_u[ids].tolist()
+            u2, max_u = self.u2[ids].reshape(ids.size, -1), self.max_u[ids].reshape(ids.size, -1)
+            for j, name in enumerate(self.inputs):
+                columns[f"rms_{name}"] = np.sqrt(u2[:, j] / rms_alive).tolist()
+                columns[f"max_abs_{name}"] = max_u[:, j].tolist()
             columns["saturated_fraction"] = (self.sat[ids] / alive).tolist()
         est[n_est <= 0] = np.nan
         for j, name in enumerate(self.est_fields):

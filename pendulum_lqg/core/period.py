@@ -12,8 +12,8 @@ So ``z[:, :k]`` is ``[x, u]`` at the start of each physics step — what the cos
 ``z[:, 1:k+1, :4]`` the state after each step — what the failure rule checks. A backend writes the
 k states (rows 1 … k, columns 0 … 3), the loop the start state, the forces and the end state.
 
-An LTI plant of ``n_x`` states (:mod:`~pendulum_lqg.core.layout`) has rows ``z = [x, u]`` of
-``n_x + 1`` numbers, the same layout: the width is the length of the bounds row.
+An LTI plant of ``n_x`` states and ``m`` inputs (:mod:`~pendulum_lqg.core.layout`) has rows
+``z = [x, u]`` of ``n_x + m`` numbers, the same layout: the width is the length of the bounds row.
 """
 
 from __future__ import annotations
@@ -39,13 +39,13 @@ SMALL_MASK = 8192
 class PeriodBuffer:
     """The period buffer of a simulator with room for ``capacity`` rows (layout: module docstring).
 
-    ``bounds_row`` (n_x+1,): the failure rule's fast-check bounds of one ``z`` row
+    ``bounds_row`` (n_x+m,): the failure rule's fast-check bounds of one ``z`` row
     (:func:`~pendulum_lqg.core.rules.failure_bounds`), tiled over the buffer; its length is the
-    width of a row.
+    width of a row. ``inputs``: m, the length of u (an LTI plant's may exceed 1).
     """
 
-    def __init__(self, capacity: int, k: int, bounds_row: np.ndarray) -> None:
-        self.capacity, self.k = capacity, k
+    def __init__(self, capacity: int, k: int, bounds_row: np.ndarray, *, inputs: int = 1) -> None:
+        self.capacity, self.k, self.inputs = capacity, k, inputs
         width = bounds_row.shape[0]
         self.buf = np.zeros((capacity, k + 2, width))
         size = self.buf.size
@@ -83,9 +83,15 @@ class PeriodView:
         k = period.k
         self.n, self.k = n, k
         self.buf = b = period.buf[:n]
-        nx = b.shape[2] - 1                           # the state's length (the cart-pole's 4)
-        self.z, self.states, self.u = b[:, :k], b[:, 1:k + 1, :nx], b[:, :k, nx]
-        self.u_by_step = self.u.T                     # (k, n): a held force (n,) broadcasts in
+        m = period.inputs
+        nx = b.shape[2] - m                           # the state's length (the cart-pole's 4)
+        self.z, self.states = b[:, :k], b[:, 1:k + 1, :nx]
+        if m == 1:
+            self.u = b[:, :k, nx]
+            self.u_by_step = self.u.T                 # (k, n): a held force (n,) broadcasts in
+        else:                                         # (n, k, m), and (k, n, m) for u (n, m)
+            self.u = b[:, :k, nx:]
+            self.u_by_step = self.u.swapaxes(0, 1)
         self.start, self.last, self.end = b[:, 0, :nx], b[:, k, :nx], b[:, k + 1, :nx]
         size = b.size
         self.flat, self.bounds = b.reshape(-1), period.bounds[:size]

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import TYPE_CHECKING, overload
+from typing import TYPE_CHECKING, cast, overload
 
 import numpy as np
 
@@ -92,34 +92,39 @@ def limits(plant: Plant, scenario: Scenario) -> tuple[float, float, float]:
 @overload
 def saturate(u: float, u_max: float) -> float: ...
 @overload
-def saturate(u: np.ndarray, u_max: float) -> np.ndarray: ...
-def saturate(u: np.ndarray | float, u_max: float) -> np.ndarray | float:
+def saturate(u: np.ndarray, u_max: float | np.ndarray) -> np.ndarray: ...
+def saturate(u: np.ndarray | float, u_max: float | np.ndarray) -> np.ndarray | float:
     """The force the actuator can apply for a requested force ``u`` [N]: ``min(max(u, −u_max),
     u_max)`` (the symmetric ``ctrlrange``). A float gives a float, an array a new array; the two
-    give the same numbers (a min and a max are exact)."""
+    give the same numbers (a min and a max are exact). For (n, m) inputs ``u_max`` may hold one
+    limit per input (m,)."""
     if isinstance(u, float):
-        return min(max(u, -u_max), u_max)
+        um = cast(float, u_max)                  # a float force has one limit
+        return min(max(u, -um), um)
     return np.minimum(np.maximum(u, -u_max), u_max)
 
 
 def nonfinite_forces(u: np.ndarray) -> np.ndarray | None:
-    """The rows (bool mask) whose requested force is nan or ±inf, or ``None`` when every force is
-    finite (a finite sum has finite terms: one sum is the check in the common case)."""
+    """The rows (bool mask) whose requested force (n,) — or any of whose inputs (n, m) — is nan or
+    ±inf, or ``None`` when every force is finite (a finite sum has finite terms: one sum is the
+    check in the common case)."""
     if np.isfinite(u.sum()):
         return None
     bad = ~np.isfinite(u)
+    if bad.ndim > 1:                      # (n, m) inputs: a row with any non-finite one
+        bad = bad.any(axis=1)
     return bad if bad.any() else None
 
 
 # ---- failure ------------------------------------------------------------------------------------
-def failure_bounds(*, theta_max: float, track_limit: float, u_max: float,
+def failure_bounds(*, theta_max: float, track_limit: float, u_max: float | np.ndarray,
                    state_limits: np.ndarray | None = None) -> np.ndarray:
     """The bounds ``[track, θ_max, RUNAWAY, RUNAWAY, 2·u_max]`` of one ``z`` row for the fast check
     :func:`all_inside`: strictly inside them no part of the failure rule can fire (a saturated force
     is inside; a nan is never inside). An LTI plant's row ``[x, u]``: ``[min(limit_i, RUNAWAY)…,
     2·u_max]`` with its ``state_limits``."""
-    if state_limits is not None:
-        return np.append(np.minimum(state_limits, RUNAWAY), 2.0 * u_max)
+    if state_limits is not None:            # u_max: one limit, or one per input (m,)
+        return np.append(np.minimum(state_limits, RUNAWAY), 2.0 * np.asarray(u_max))
     return np.array([track_limit, theta_max, RUNAWAY, RUNAWAY, 2.0 * u_max])
 
 
@@ -204,16 +209,24 @@ def _none_failed(n: int) -> tuple[np.ndarray, np.ndarray, None]:
 
 
 # ---- cost ---------------------------------------------------------------------------------------
-def cost_weights(cost_Q: tuple[float, ...], cost_R: float, h: float) -> np.ndarray:
-    """``h·[diag(Q), R]`` (n_x+1,): the weights of one physics step's ``z²`` in the period cost."""
+def cost_weights(cost_Q: tuple[float, ...], cost_R: float, h: float, *,
+                 matrix: np.ndarray | None = None) -> np.ndarray:
+    """``h·[diag(Q), R]`` (n_x+1,): the weights of one physics step's ``z²`` in the period cost;
+    or, given the full weight ``matrix`` ``[[Q, N], [Nᵀ, R]]`` (n_x+m, n_x+m) of an LTI plant
+    with a full Q, a cross term or several inputs, ``h`` times it."""
+    if matrix is not None:
+        return h * np.asarray(matrix, dtype=float)
     return h * np.append(np.asarray(cost_Q, dtype=float), cost_R)
 
 
 def period_cost(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """``Σ_j Σ_i weights_i · z[j, i]²`` per row of a period's (n, k, 5) ``z`` (nothing masked).
+    """``Σ_j Σ_i weights_i · z[j, i]²`` per row of a period's (n, k, 5) ``z`` (nothing masked);
+    with a weight matrix (:func:`cost_weights`), ``Σ_j z[j]ᵀ weights z[j]``.
 
     One ``einsum`` (no temporaries the size of ``z``); a row's result does not depend on the other
     rows, so a batch and a single row give the same floats."""
+    if weights.ndim == 2:
+        return np.einsum("nki,ij,nkj->n", z, weights, z)
     return np.einsum("nki,nki,i->n", z, z, weights)
 
 

@@ -209,7 +209,8 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: i
             res = sim.step(u, x_hat=x_hat)
             if log is not None:     # u: the requested force after saturation; u_policy: before
                 log.add(sim.ids, u=res.requested, cost=res.cost, states=res.states,
-                        u_policy=np.asarray(u, dtype=float).reshape(-1), **snap)
+                        u_policy=np.asarray(u, dtype=float).reshape(res.requested.shape),
+                        **snap)
             if res.failed.any():
                 keep = np.nonzero(~res.failed)[0]
                 sim.select(keep)

@@ -89,13 +89,15 @@ def process_noise_covariance(A: ArrayLike, G: ArrayLike, W: ArrayLike, dt: float
 
 
 @design_function('A, Q, R and dt')
-def sampled_cost(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, dt: float,
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def sampled_cost(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, dt: float, *,
+                 N: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     r"""Exact discrete weights of a continuous quadratic cost under zero-order hold.
 
     With :math:`u` held over each period, :math:`\int_{nT}^{(n+1)T} x^TQx + u^TRu\,dt =
     x_n^T Q_d x_n + 2 x_n^T N_d u_n + u_n^T R_d u_n`, so a ``dlqr`` with these weights minimises
-    exactly the continuous cost a simulation measures (Franklin, Powell & Workman, §9.4.4).
+    exactly the continuous cost a simulation measures (Franklin, Powell & Workman, §9.4.4). A
+    cross term ``N`` (n, m) of the continuous cost ``∫ xᵀQx + 2xᵀNu + uᵀRu dt`` enters the same
+    integral (default none).
 
     Returns
     -------
@@ -112,6 +114,9 @@ def sampled_cost(A: ArrayLike, B: ArrayLike, Q: ArrayLike, R: ArrayLike, dt: flo
     F[:n, :n], F[:n, n:] = A, B
     Qz = np.zeros((n + m, n + m))
     Qz[:n, :n], Qz[n:, n:] = Q, R
+    if N is not None:
+        Qz[:n, n:] = as_matrix("N", N, (n, m))
+        Qz[n:, :n] = Qz[:n, n:].T
     k = n + m
     block = np.zeros((2 * k, 2 * k))
     block[:k, :k] = -F.T

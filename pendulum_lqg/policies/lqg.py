@@ -64,8 +64,8 @@ class Policy:
     ----------
     K : (1, 4) state-feedback gain
     estimator : the runtime estimator
-    u_max : actuator limit [N]; the policy saturates its own output so its model sees the
-        applied force
+    u_max : actuator limit [N] (an LTI plant of m inputs: one per input, (m,)); the policy
+        saturates its own output so its model sees the applied force
     name : "<controller>+<observer>"
     info : design data (gains, poles, matrices) for reports and recordings
     independent_rows : always True — each row (episode) evolves on its own, so the core may run
@@ -75,7 +75,7 @@ class Policy:
     independent_rows: ClassVar[bool] = True
     K: np.ndarray
     estimator: Estimator
-    u_max: float
+    u_max: float | np.ndarray
     name: str
     x_hat0: np.ndarray = field(default_factory=lambda: np.zeros(4))
     info: dict[str, Any] = field(default_factory=dict)
@@ -91,11 +91,12 @@ class Policy:
         self.estimator.reset(x_hat0)
 
     def act(self, y: np.ndarray) -> np.ndarray:
-        """One control period: measurement (n, 2) (or state (n, 4)) → force (n,) in newtons."""
+        """One control period: measurement (n, 2) (or state (n, 4)) → force (n,) in newtons (an
+        LTI plant of m inputs: (n, m))."""
         x_hat = self.estimator.estimate(y)
         u = saturate(-matvec(self.K, x_hat), self.u_max)    # the core's rule: the observer sees u applied
         self.estimator.update(u)
-        return u[:, 0]
+        return u[:, 0] if u.shape[1] == 1 else u          # (n, m) for a plant of m inputs
 
     def select(self, rows: np.ndarray) -> None:
         self.estimator.select(rows)

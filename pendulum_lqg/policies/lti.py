@@ -11,13 +11,14 @@ from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.lti import LTI_CONTROLLERS, LTI_OBSERVERS, LTIPlant
 
 
-def design_lti_policy(plant: LTIPlant, name: str, *, u_max: float | None = None) -> Any:
+def design_lti_policy(plant: LTIPlant, name: str, *,
+                      u_max: float | np.ndarray | None = None) -> Any:
     """The built-in policy ``"controller+observer"`` on ``plant``: ``lqr`` (continuous, emulated
     under sample-and-hold) or ``dlqr`` (on the ZOH model with the exact sampled cost weights);
     observers ``none``, ``kalman`` (steady-state filter, current form), ``kalman-predictor``,
     ``luenberger`` (current form, the plant's ``observer_poles`` by z = e^{sT}, default three
-    times the controller's). ``u_max``: the force limit in force, to which the policy saturates
-    its own output (default the file's ``force_limit``). Returns a
+    times the controller's). ``u_max``: the limit in force, one or one per input, to which the
+    policy saturates its own output (default the file's ``force_limit``). Returns a
     :class:`~pendulum_lqg.policies.lqg.Policy`."""
     from pendulum_lqg import design
     from pendulum_lqg.policies.estimators import CurrentEstimator, PredictorEstimator, TrueState
@@ -28,15 +29,7 @@ def design_lti_policy(plant: LTIPlant, name: str, *, u_max: float | None = None)
         raise ConfigError(f"policy: expected one of {', '.join(LTI_CONTROLLERS)} + one of "
                           f"{', '.join(LTI_OBSERVERS)} for an LTI plant, got {name!r}")
     T, Phi, Gamma, C = plant.control_period, plant.Phi, plant.Gamma, plant.C
-    if controller == "lqr":
-        if plant.A is None or plant.B is None:
-            raise ConfigError(f"policy: {plant.name!r} is given in discrete time; use dlqr")
-        K = design.lqr(plant.A, plant.B, plant.Q, plant.R).K
-    elif plant.A is not None and plant.B is not None:
-        Qd, Rd, Nd = design.sampled_cost(plant.A, plant.B, plant.Q, plant.R, T)
-        K = design.dlqr(Phi, Gamma, Qd, Rd, N=Nd).K
-    else:
-        K = design.dlqr(Phi, Gamma, plant.Q, plant.R).K
+    K = lti_controller(plant, controller)
     info: dict[str, Any] = {"K": K, "Phi": Phi, "Gamma": Gamma, "C": C}
     n = plant.n_states
     est: Any
@@ -51,14 +44,38 @@ def design_lti_policy(plant: LTIPlant, name: str, *, u_max: float | None = None)
         if plant.observer_poles is not None:     # s-plane, mapped by z = e^{sT}
             obs = design.dluenberger(Phi, C, np.asarray(plant.observer_poles), form="current",
                                      dt=T)
-        else:     # 3× the controller's s-poles, the documents' rule: z = z_c³ (e^{3sT})
-            z = np.linalg.eigvals(Phi - Gamma @ K)
-            obs = design.dluenberger(Phi, C, z ** 3, form="current")
+        else:
+            obs = design.dluenberger(Phi, C, default_observer_z(plant, K), form="current")
         est = CurrentEstimator(Phi, Gamma, C, obs.L)
         info["L"], info["observer_poles"] = obs.L, obs.poles
-    return Policy(K=K, estimator=est, u_max=plant.force_limit if u_max is None else float(u_max),
+    m = plant.n_inputs
+    limit = plant.limits_per_input if u_max is None else np.broadcast_to(
+        np.asarray(u_max, dtype=float), (m,)).copy()
+    return Policy(K=K, estimator=est, u_max=float(limit[0]) if m == 1 else limit,
                   name=name,
                   x_hat0=np.zeros(n), info=info)
+
+
+def lti_controller(plant: LTIPlant, controller: str) -> np.ndarray:
+    """The gain K (m, n) of ``controller`` on ``plant``: ``lqr`` the continuous design of
+    ``∫ xᵀQx + 2xᵀNu + uᵀRu dt``, ``dlqr`` the discrete one with the exact sampled weights
+    (:func:`~pendulum_lqg.design.sampled_cost`), or on a plant given in discrete time its own
+    per-sample Q, R, N."""
+    from pendulum_lqg import design
+
+    if controller == "lqr":
+        if plant.A is None or plant.B is None:
+            raise ConfigError(f"policy: {plant.name!r} is given in discrete time; use dlqr")
+        return design.lqr(plant.A, plant.B, plant.Q, plant.R, N=plant.N).K
+    Qd, Rd, Nd = discrete_weights(plant)
+    return design.dlqr(plant.Phi, plant.Gamma, Qd, Rd, N=Nd).K
+
+
+def default_observer_z(plant: LTIPlant, K: np.ndarray) -> np.ndarray:
+    """The default discrete observer poles: the controller's s-poles three times as fast, the
+    documents' rule of thumb, ``z = z_c³`` (``e^{3sT}``) with ``z_c`` the eigenvalues of
+    ``Φ − ΓK``."""
+    return np.linalg.eigvals(plant.Phi - plant.Gamma @ K) ** 3
 
 
 def lti_scenario(plant: LTIPlant, *, duration: float = 10.0, noise_scale: float = 1.0,
@@ -117,3 +134,62 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
                                start=episode_start(x0, x0_std, estimate0, policy),
                                burn_in=burn_in)
     return out
+
+
+def design_lti_all(plant: LTIPlant) -> dict[str, Any]:
+    """Every design of ``design --lti`` on ``plant`` (what :func:`~pendulum_lqg.policies.lqg.design_all`
+    is for the cart-pole), as plain arrays and design results.
+
+    Continuous designs (a plant given by A, B only): ``lqr`` of ``∫ xᵀQx + 2xᵀNu + uᵀRu dt``,
+    ``kalman`` (Kalman–Bucy with the density W of w through G — or ``Wd / T`` for a file's
+    per-period ``Wd`` — and the measurement density ``V·T``), ``luenberger`` (the file's poles, or
+    3× the LQR's), ``lqg`` their separation check. Discrete designs: ``dlqr`` (exact sampled
+    weights), ``dkalman`` (filter gain L, predictor gain ``L_pred = Φ L``), ``dluenberger``
+    (current form, the file's poles by ``z = e^{sT}`` or :func:`default_observer_z`), ``dlqg`` the
+    separation check of dlqr + discrete Kalman in current form.
+    """
+    from pendulum_lqg import design
+
+    T, Phi, Gamma, C = plant.control_period, plant.Phi, plant.Gamma, plant.C
+    n, Vd = plant.n_states, plant.V
+    out: dict[str, Any] = {
+        "dt": T, "structure_discrete": design.structure(Phi, Gamma, C, discrete=True),
+        "open_loop_poles_discrete": np.linalg.eigvals(Phi),
+        "dkalman": design.dkalman(Phi, np.eye(n), C, plant.process_covariance(), Vd),
+        "weights": {"Q": plant.Q, "R": plant.R, "N": plant.cross_weight, "W": plant.W, "V": Vd,
+                    "W_per_period": plant.process_covariance()}}
+    Qd, Rd, Nd = discrete_weights(plant)
+    out["dlqr"] = design.dlqr(Phi, Gamma, Qd, Rd, N=Nd)
+    out["weights"].update(Qd=Qd, Rd=Rd, Nd=Nd)
+    poles = None if plant.observer_poles is None else np.asarray(plant.observer_poles)
+    out["dluenberger"] = (design.dluenberger(Phi, C, poles, form="current", dt=T)
+                          if poles is not None else
+                          design.dluenberger(Phi, C, default_observer_z(plant, out["dlqr"].K),
+                                             form="current"))
+    out["dlqg"] = design.lqg(Phi, Gamma, C, out["dlqr"].K, out["dkalman"].L, form="current")
+    if plant.A is None or plant.B is None:
+        return out
+    A, B = plant.A, plant.B
+    W = plant.W / T if plant.W_per_period else plant.W     # a density: per period / T
+    out["structure"] = design.structure(A, B, C)
+    out["open_loop_poles"] = np.linalg.eigvals(A)
+    out["lqr"] = design.lqr(A, B, plant.Q, plant.R, N=plant.N)
+    out["kalman"] = design.kalman(A, plant.G, C, W, Vd * T)
+    out["luenberger"] = design.luenberger(A, C, poles if poles is not None
+                                          else 3 * out["lqr"].poles)
+    out["lqg"] = design.lqg(A, B, C, out["lqr"].K, out["kalman"].L, form="continuous")
+    out["weights"].update(W_density=W, V_density=Vd * T)
+    return out
+
+
+def discrete_weights(plant: LTIPlant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(Qd, Rd, Nd)``: the per-period weights of the discrete LQR on ``plant``, the exact
+    sampled equivalents of its continuous ``Q, R, N`` (:func:`~pendulum_lqg.design.sampled_cost`),
+    or, for a plant given in discrete time, its own per-sample ``Q, R, N``."""
+    from pendulum_lqg import design
+
+    if plant.A is not None and plant.B is not None:
+        Qd, Rd, Nd = design.sampled_cost(plant.A, plant.B, plant.Q, plant.R,
+                                         plant.control_period, N=plant.N)
+        return Qd, Rd, Nd
+    return plant.Q, plant.R, plant.cross_weight

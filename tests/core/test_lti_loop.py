@@ -4,6 +4,7 @@ metrics, limits and failure rule."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -156,10 +157,53 @@ def test_lti_plant_refuses_what_its_loop_cannot_run(double_integrator):
         Simulator(plant, Scenario(control_period=0.02, plant="linear-zoh"))
     with pytest.raises(ConfigError, match="plant: an LTI plant runs"):
         Simulator(plant, Scenario(control_period=0.01, plant="linear-euler"))
-    full_q = lti_from_mapping({"control_period": 0.1, "A": [[0, 1], [0, 0]], "B": [[0], [1]],
-                               "Q": [[1, 0.5], [0.5, 1]]})
-    with pytest.raises(ConfigError, match="Q: the simulated cost takes a diagonal Q"):
-        Simulator(full_q, Scenario(control_period=0.1, plant="linear-zoh"))
+    two = load_lti(EXPERIMENTS / "two_mass.toml")
+    with pytest.raises(ConfigError, match="actuator_delay: the actuator's delay line and lag "
+                                          "take one input; 'two_mass' has 2"):
+        Simulator(two, Scenario(control_period=0.02, plant="linear-zoh", actuator_delay=0.02))
+
+
+def test_two_input_plant_follows_its_closed_loop_and_full_cost_exactly():
+    """Noise-free, unsaturated: the two-mass plant under dlqr+none is ``x ← (Φ − ΓK) x`` each
+    period, u = −K x (n, 2), and the cost is ``Σ T [x; u]ᵀ [[Q, N], [Nᵀ, R]] [x; u]`` with its
+    full Q and a cross term."""
+    plant = load_lti(EXPERIMENTS / "two_mass.toml")
+    N = np.array([[0.1, 0.0], [0.0, -0.1], [0.0, 0.0], [0.0, 0.0]])
+    plant = dataclasses.replace(plant, N=N, x0=np.array([0.05, -0.02, 0.0, 0.01]))
+    sc = _scenario(plant, 2.0, noise=_quiet())
+    policy = design_lti_policy(plant, "dlqr+none")
+    res = run_episodes(plant, sc, policy, seed=1, episodes=[0], trajectory=True)
+    tr, row = res.trajectories[0], res.rows[0]
+    x = plant.x0
+    xs, us = [], []
+    for _ in range(100):
+        xs.append(x)
+        us.append(-policy.K @ x)
+        x = (plant.Phi - plant.Gamma @ policy.K) @ x
+    xs, us = np.array(xs), np.array(us)
+    np.testing.assert_allclose(tr.x, xs, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(tr.u, us, rtol=0, atol=1e-14)
+    weight = np.block([[plant.Q, N], [N.T, plant.R]])
+    z = np.hstack([xs, us])
+    cost = plant.control_period * np.einsum("ni,ij,nj->", z, weight, z)
+    assert row["cost"] == pytest.approx(cost, rel=1e-12)
+    assert row["rms_f1"] == pytest.approx(np.sqrt(np.mean(us[:, 0] ** 2)), rel=1e-12)
+    assert row["max_abs_f2"] == pytest.approx(np.max(np.abs(us[:, 1])), rel=1e-12)
+    assert row["saturated_fraction"] == 0.0
+
+
+def test_two_input_limits_saturate_each_input_on_its_own():
+    """Per-input limits: f₁ ≤ 0.01 saturates from the start, f₂ ≤ 100 never does; the policy and
+    the core clip each input to its own limit."""
+    plant = load_lti(EXPERIMENTS / "two_mass.toml")
+    plant = dataclasses.replace(plant, input_limits=np.array([0.01, 100.0]))
+    res = run_episodes(plant, _scenario(plant, 1.0, noise=_quiet()),
+                       design_lti_policy(plant, "dlqr+none"), seed=1, episodes=[0],
+                       trajectory=True)
+    tr, row = res.trajectories[0], res.rows[0]
+    assert np.max(np.abs(tr.u[:, 0])) == pytest.approx(0.01)
+    assert np.max(np.abs(tr.u[:, 1])) > 0.5
+    assert row["max_abs_f1"] == pytest.approx(0.01) and row["saturated_fraction"] > 0
 
 
 def _quiet():

@@ -672,6 +672,13 @@ def _check_output(cmd: Command, proc: subprocess.CompletedProcess) -> None:
             assert out.strip() == f"pendulum-lqg {pendulum_lqg.__version__}"
         elif "--help" in argv or "-h" in argv:
             assert out.startswith("usage: pendulum-lqg"), out
+        elif argv[0] == "design" and "--lti" in argv:      # a plant given as matrices
+            if "--json" in argv:
+                d = json.loads(out)
+                assert len(d["K_dlqr"]) == len(d["inputs"])
+                assert len(d["K_dlqr"][0]) == len(d["states"])
+            else:
+                assert "Discrete LQR" in out and "Separation principle" in out, out
         elif argv[0] == "design" and "--json" in argv:
             K = json.loads(out)["K_dlqr"]
             assert len(K) == 1 and len(K[0]) == 4 and all(abs(k) > 0 for k in K[0])

@@ -37,6 +37,8 @@ class LinearPhysics:
         if getattr(plant, "is_lti", False):        # an LTIPlant: its own (Φ, Γ) at T, k = 1
             lti: Any = plant                       # (pendulum_lqg.model.lti imports the core)
             self.Phi, self.Gamma = lti.Phi, lti.Gamma[:, 0]
+            if lti.Gamma.shape[1] > 1:             # m inputs: u (n, m) enters as Γ u
+                self.Gamma = lti.Gamma
             return
         lin = linearize(plant)
         h = plant.timestep
@@ -56,7 +58,10 @@ class LinearPhysics:
         """See :meth:`Physics.advance <pendulum_lqg.core.physics.base.Physics.advance>`;
         nothing resets."""
         states = out.states
-        if self.kind == "linear-zoh":
+        if self.Gamma.ndim == 2:                       # an LTI plant of m inputs, k = 1
+            states[:, 0] = np.einsum("ij,nj->ni", self.Phi, x) + np.einsum(
+                "ij,nj->ni", self.Gamma, u)
+        elif self.kind == "linear-zoh":
             for j in range(self.k):
                 x = np.einsum("ij,nj->ni", self.Phi, x) + u[:, None] * self.Gamma
                 states[:, j] = x
