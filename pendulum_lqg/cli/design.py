@@ -151,27 +151,19 @@ def _gain_lines(d: dict[str, Any]) -> list[str]:
 
 
 # ---- design --lti --------------------------------------------------------------------------------
-#: Options of ``design`` that describe the cart-pole (their default), refused with ``--lti``.
-_CARTPOLE_ONLY = {"model": None, "q": None, "r": None, "w": None, "v": None,
-                  "observer_poles": None, "process_noise": "state"}
-
-
 def _design_lti(args: argparse.Namespace) -> int:
     """``design --lti FILE``: the plant, its discretisation and every design, in the layout and
     the JSON keys of the cart-pole's ``design`` (a plant given in discrete time has no continuous
     designs: their keys are absent)."""
     import numpy as np
 
-    from pendulum_lqg.cli.parser import cfg_error
+    from pendulum_lqg.cli.lti import CARTPOLE_OPTIONS, refuse_cartpole_options
     from pendulum_lqg.core import defaults
     from pendulum_lqg.model.lti import load_lti
     from pendulum_lqg.policies.lti import design_lti_all
 
-    for option, default in _CARTPOLE_ONLY.items():
-        if getattr(args, option) != default:
-            raise cfg_error(f"--{option.replace('_', '-')}: not with --lti (the file holds it)")
-    if args.dt != defaults.CONTROL_PERIOD:
-        raise cfg_error("--dt: not with --lti (the file's control_period)")
+    refuse_cartpole_options(args, {**CARTPOLE_OPTIONS,
+                                   "dt": (defaults.CONTROL_PERIOD, "the file's control_period")})
     plant = load_lti(args.lti)
     d = design_lti_all(plant)
     data = _lti_data(args.lti, plant, d)

@@ -14,18 +14,30 @@ import numpy as np
 from pendulum_lqg.cli.parser import cfg_error, jsonable
 from pendulum_lqg.core import defaults
 
-#: Options of ``run`` that describe the cart-pole; with ``--lti`` the file says them instead
-#: (their value when not given, and what the file holds in their place).
-_CARTPOLE_ONLY = {"model": (None, "the file is the plant"), "theta0": (defaults.X0[1], "the file's x0"),
-                  "q": (None, "the file's Q"), "r": (None, "the file's R"),
-                  "w": (None, "the file's W"), "v": (None, "the file's V"),
-                  "observer_poles": (None, "the file's observer_poles"),
-                  "process_noise": ("state", "the file's G and W"),
-                  "theta_max": (defaults.THETA_MAX, "the file's state_limits"),
-                  "track_limit": (None, "the file's state_limits"),
-                  "record": (None, "recordings draw the cart-pole"),
-                  "spawn": (False, "recordings draw the cart-pole"),
-                  "randomize": (None, "it randomises the cart-pole's model")}
+#: Options that describe the cart-pole, shared by ``run``, ``theory`` and ``design``: with ``--lti``
+#: the file says them instead (their value when not given, and what the file holds in their place).
+CARTPOLE_OPTIONS = {"model": (None, "the file is the plant"),
+                    "q": (None, "the file's Q"), "r": (None, "the file's R"),
+                    "w": (None, "the file's W"), "v": (None, "the file's V"),
+                    "observer_poles": (None, "the file's observer_poles"),
+                    "process_noise": ("state", "the file's G and W")}
+#: ``run``'s further options of the cart-pole.
+_RUN_ONLY = {"theta0": (defaults.X0[1], "the file's x0"),
+             "theta_max": (defaults.THETA_MAX, "the file's state_limits"),
+             "track_limit": (None, "the file's state_limits"),
+             "record": (None, "recordings draw the cart-pole"),
+             "spawn": (False, "recordings draw the cart-pole"),
+             "randomize": (None, "it randomises the cart-pole's model")}
+
+
+def refuse_cartpole_options(args: argparse.Namespace,
+                            options: dict[str, tuple[Any, str]]) -> None:
+    """Refuse, one line each, an option of ``options`` (``{dest: (default, what the file holds
+    instead)}``) given with ``--lti``. An option given at its default cannot be told apart from
+    one not given, and is not refused."""
+    for option, (default, why) in options.items():
+        if getattr(args, option) != default:
+            raise cfg_error(f"--{option.replace('_', '-')}: not with --lti ({why})")
 
 
 #: The scenario fields an LTI plant runs with (the others describe the cart-pole; the file holds
@@ -107,10 +119,7 @@ def _check_options(args: argparse.Namespace) -> None:
     if args.plant not in ("mujoco", "linear-zoh"):        # mujoco: the option's default
         raise cfg_error(f"--plant: an LTI plant runs as its own exact sampled model "
                         f"(linear-zoh), got {args.plant!r}")
-    for option, (default, why) in _CARTPOLE_ONLY.items():
-        if getattr(args, option) != default:
-            flag = "--" + option.replace("_", "-")
-            raise cfg_error(f"{flag}: not with --lti ({why})")
+    refuse_cartpole_options(args, {**CARTPOLE_OPTIONS, **_RUN_ONLY})
 
 
 def _print_summary(config: dict[str, Any], scenario: Any, s: dict[str, Any],

@@ -12,19 +12,14 @@ from typing import Any
 
 from pendulum_lqg.core import defaults
 
-#: Options of ``theory`` that describe the cart-pole; with ``--lti`` the file says them instead
-#: (their value when not given, and what the file holds in their place).
-_CARTPOLE_ONLY = {"model": (None, "the file is the plant"),
-                  "plant": ("linear-zoh", "the file's exact sampled model is the plant"),
-                  "dt": (defaults.CONTROL_PERIOD, "the file's control_period"),
-                  "theta0": (defaults.X0[1], "the file's x0"),
-                  "q": (None, "the file's Q"), "r": (None, "the file's R"),
-                  "w": (None, "the file's W"), "v": (None, "the file's V"),
-                  "observer_poles": (None, "the file's observer_poles"),
-                  "process_noise": ("state", "the file's G and W"),
-                  "theta_max": (defaults.THETA_MAX, "the file's state_limits"),
-                  "track_limit": (None, "the file's state_limits"),
-                  "force_limit": (None, "the file's force_limit")}
+#: ``theory``'s further options of the cart-pole, refused with ``--lti`` (beside
+#: :data:`~pendulum_lqg.cli.lti.CARTPOLE_OPTIONS`).
+_THEORY_ONLY = {"plant": ("linear-zoh", "the file's exact sampled model is the plant"),
+                "dt": (defaults.CONTROL_PERIOD, "the file's control_period"),
+                "theta0": (defaults.X0[1], "the file's x0"),
+                "theta_max": (defaults.THETA_MAX, "the file's state_limits"),
+                "track_limit": (None, "the file's state_limits"),
+                "force_limit": (None, "the file's force_limit")}
 
 
 def limit_fields(args: argparse.Namespace) -> dict[str, Any]:
@@ -93,12 +88,9 @@ def _lti_theory(args: argparse.Namespace) -> int:
 
 def _check_lti_options(args: argparse.Namespace) -> None:
     """Refuse, one line each, the cart-pole's options given with ``--lti``."""
-    from pendulum_lqg.cli.parser import cfg_error
+    from pendulum_lqg.cli.lti import CARTPOLE_OPTIONS, refuse_cartpole_options
 
-    for option, (default, why) in _CARTPOLE_ONLY.items():
-        if getattr(args, option) != default:
-            flag = "--" + option.replace("_", "-")
-            raise cfg_error(f"{flag}: not with --lti ({why})")
+    refuse_cartpole_options(args, {**CARTPOLE_OPTIONS, **_THEORY_ONLY})
 
 
 def _print_table(results: dict[str, Any], header: str) -> None:

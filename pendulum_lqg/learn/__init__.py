@@ -8,6 +8,9 @@ package's own dependencies.
 Modules: ``methods`` (every method, its options and extra), ``train`` (one run, every input checked
 first), ``runs`` (a run's names, seeds, folder, stop and progress), ``curve`` (the learning curve),
 ``deep`` (the SB3 methods), ``ars`` (random search), ``openloop`` (``sysid-openloop``),
-``sysid_lqg`` (``sysid-lqg`` over :mod:`~pendulum_lqg.learn.closed_loop`), ``clone``
-(``ls-clone``), ``pilot``, ``noise_ladder`` and ``figures`` (``python -m pendulum_lqg.learn.X``).
+``closed_loop`` (closed-loop identification and the certainty-equivalent LQG design, over the
+prediction-error fit of :mod:`pendulum_lqg.design.pem`), ``sysid_lqg`` (``sysid-lqg`` over
+``closed_loop``), ``clone`` (``ls-clone``), ``price`` (the price of not knowing the model: the
+identified controller's score and gap against its data budget), ``pilot``, ``noise_ladder`` and
+``figures`` (``python -m pendulum_lqg.learn.X``).
 """
