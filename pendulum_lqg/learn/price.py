@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from pendulum_lqg.errors import ConfigError, PendulumLQGError
+from pendulum_lqg.errors import ConfigError
 
 BUDGETS = (5_000, 10_000, 20_000, 50_000, 100_000, 200_000, 500_000)
 SUITES = ("lecture", "mismatch")
@@ -149,13 +149,18 @@ def gap_slope(rows: list[dict[str, Any]], suite: str) -> tuple[float, float, int
 
 
 def read_curves(folder: Path) -> dict[str, list[dict[str, np.ndarray]]]:
-    """``{method: [run columns]}`` of the ``METHOD-seedS-curve.csv`` files in ``folder``."""
+    """``{method: [run columns]}`` of the model-free methods' ``METHOD-seedS-curve.csv`` files in
+    ``folder``: the SB3 methods and ARS from zero, trained at the suite's own noise (the noise
+    ladder's runs, ``METHOD-noiseX``, play another problem; the identification and clone runs are
+    the model-based side this figure draws on its own)."""
+    from pendulum_lqg.learn.methods import METHODS
     from pendulum_lqg.util.files import read_csv
 
+    model_free = {name for name, m in METHODS.items() if m.extra} | {"ars-history"}
     out: dict[str, list[dict[str, np.ndarray]]] = {}
     for path in sorted(folder.glob("*-curve.csv")):
         match = CURVE_FILE.match(path.name)
-        rows = read_csv(path) if match else []
+        rows = read_csv(path) if match and match["method"] in model_free else []
         if rows and {"env_steps", "score_mean"} <= set(rows[0]):
             out.setdefault(match["method"] if match else "", []).append(
                 {k: np.array([_number(r[k]) for r in rows]) for k in ("env_steps", "score_mean")})
@@ -214,8 +219,30 @@ def draw(rows: list[dict[str, Any]], curves: dict[str, list[dict[str, np.ndarray
         bottom.legend(fontsize=7)
     fig.suptitle("The price of not knowing the model: closed-loop identification + LQG\n"
                  "(median and IQR over data seeds; each suite's 100 episodes)", fontsize=10)
-    fig.savefig(path, dpi=120)
+    from pendulum_lqg.util.files import save_figure
+
+    save_figure(fig, path, where="--out", what="figure", dpi=120)
     return slopes
+
+
+def table_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """The figure's numbers as a Markdown table: per suite and budget, the seeds' runs, the median
+    logged steps, and the median [IQR] of the success rate, the failure-aware score and the gap."""
+    out = ["| suite | budget | runs | logged steps (median) | success | failure-aware score "
+           "| gap J/J* − 1 |", "|---|---|---|---|---|---|---|"]
+
+    def cell(med: float, lo: float, hi: float, fmt: str) -> str:
+        return "–" if not np.isfinite(med) else f"{med:{fmt}} [{lo:{fmt}}, {hi:{fmt}}]"
+
+    for suite in sorted({str(r["suite"]) for r in rows}, key=lambda s: (s not in SUITES, s)):
+        stats = {k: summary(rows, suite, k) for k in ("success", "score", "gap", "logged_steps")}
+        for i, budget in enumerate(stats["score"][0]):
+            runs = sum(1 for r in rows if r["suite"] == suite and int(r["budget"]) == budget)
+            out.append(f"| {suite} | {int(budget):,} | {runs} | {stats['logged_steps'][1][i]:,.0f} | "
+                       + " | ".join(cell(stats[k][1][i], stats[k][2][i], stats[k][3][i], f)
+                                    for k, f in (("success", ".2f"), ("score", ".3f"),
+                                                 ("gap", "+.4f"))) + " |")
+    return out
 
 
 def _int_list(text: str, what: str) -> list[int]:
@@ -271,7 +298,7 @@ def _main(args: argparse.Namespace) -> int:
     if not rows or tuple(rows[0]) != COLUMNS:
         raise ConfigError(f"csv: {args.csv}: expected the columns {', '.join(COLUMNS)}")
     curves = read_curves(args.curves) if args.curves.is_dir() else {}
-    curves = {m: runs for m, runs in curves.items() if not m.startswith("sysid")}
+    print("\n".join(table_lines(rows)))
     for suite, (slope, _, count) in draw(rows, curves, out).items():
         print(f"{suite}: gap slope {slope:.2f} over {count} budgets (1/N: −1)")
     print(f"wrote {out}")
@@ -279,15 +306,10 @@ def _main(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from pendulum_lqg.util.scripts import script_status
+
     args = _parser().parse_args(argv)
-    try:
-        return _main(args)
-    except PendulumLQGError as exc:
-        print(f"error: {' '.join(str(exc).split())}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+    return script_status(lambda: _main(args))
 
 
 if __name__ == "__main__":

@@ -65,3 +65,16 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         price.main(["run"])
     assert exc.value.code == 2
+
+
+def test_the_table_gives_each_budgets_median_and_quartiles():
+    """Three seeds at one budget: the table's cells are numpy's median and quartiles of them."""
+    rows = [{"suite": "lecture", "seed": s, "budget": 10_000, "logged_steps": steps,
+             "stepped_steps": steps, "success": ok, "score": score, "J": 1.0, "J_ref": 1.0,
+             "gap": gap, "wall_seconds": 1.0}
+            for s, (steps, ok, score, gap) in enumerate([(9_000, 1.0, 0.99, 0.01),
+                                                          (8_000, 0.5, 0.40, 0.20),
+                                                          (10_000, 1.0, 0.97, 0.03)])]
+    lines = price.table_lines(rows)
+    assert lines[2] == ("| lecture | 10,000 | 3 | 9,000 | 1.00 [0.75, 1.00] | 0.970 [0.685, 0.980] "
+                        "| +0.0300 [+0.0200, +0.1150] |")
