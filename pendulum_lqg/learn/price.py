@@ -4,7 +4,7 @@
 
     uv run python -m pendulum_lqg.learn.price run --out docs/leaderboard/price.csv
     uv run python -m pendulum_lqg.learn.price figure docs/leaderboard/price.csv \\
-        --out docs/leaderboard/price.png
+        --out docs/leaderboard/price.png --table docs/leaderboard/price.md
 
 ``run``: for every suite, data seed ``S`` and budget ``N`` (logged env steps), the controller of
 :func:`~pendulum_lqg.learn.closed_loop.identify_closed_loop` (root seed ``500 000 + 1000·S``, the
@@ -200,6 +200,7 @@ def draw(rows: list[dict[str, Any]], curves: dict[str, list[dict[str, np.ndarray
             for method, runs in sorted(curves.items()):
                 _rl_curve(top, method, runs)
         top.axhline(1.0, color="grey", lw=0.8)
+        top.set_xlim(left=steps.min() / 1.5)     # a curve's point at 0 steps is its start
         top.set(xscale="log", ylim=(-0.02, 1.08), title=suite, ylabel="failure-aware score",
                 xlabel="logged env steps (sysid-lqg: the budget; RL: env steps)")
         top.legend(fontsize=7, loc="lower right")
@@ -273,7 +274,9 @@ def _parser() -> argparse.ArgumentParser:
     f.add_argument("--out", type=Path, required=True, help="the PNG to write")
     f.add_argument("--curves", type=Path, default=Path("experiments/agents/models"),
                    help="folder of the deep-RL methods' METHOD-seedS-curve.csv")
-    f.add_argument("--force", action="store_true", help="replace an existing --out")
+    f.add_argument("--table", type=Path, default=None,
+                   help="also write the printed table (Markdown) to this file")
+    f.add_argument("--force", action="store_true", help="replace an existing --out or --table")
     return ap
 
 
@@ -297,8 +300,16 @@ def _main(args: argparse.Namespace) -> int:
     rows = read_csv(args.csv)
     if not rows or tuple(rows[0]) != COLUMNS:
         raise ConfigError(f"csv: {args.csv}: expected the columns {', '.join(COLUMNS)}")
+    table = None if args.table is None else output_file("--table", args.table)
+    if table is not None and table.exists() and not args.force:
+        raise ConfigError(f"--table: {table} exists; give --force to replace it")
     curves = read_curves(args.curves) if args.curves.is_dir() else {}
-    print("\n".join(table_lines(rows)))
+    lines = table_lines(rows)
+    print("\n".join(lines))
+    if table is not None:
+        from pendulum_lqg.util.files import atomic_write
+
+        atomic_write(table, "\n".join(lines) + "\n")
     for suite, (slope, _, count) in draw(rows, curves, out).items():
         print(f"{suite}: gap slope {slope:.2f} over {count} budgets (1/N: −1)")
     print(f"wrote {out}")
