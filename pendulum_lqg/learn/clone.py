@@ -99,7 +99,7 @@ def train_clone(ctx: RunContext) -> list[Path]:
     frames = int(ctx.options.get("frames") or FRAMES)
     curve = Curve(ctx.suite, ctx.path("-curve.csv"), name=ctx.name, log=ctx.log)
     sysid = ctx.method.replace("ls-clone", "sysid-lqg")
-    rounds = identified_rounds(ctx)
+    rounds = identified_rounds(ctx, steps=None)      # --steps is the fit's samples
     if not rounds:
         raise ConfigError(f"{ctx.name}: the identification gave no controller")
     teacher = round_document(ctx, rounds[-1], 0.0, len(rounds))

@@ -19,11 +19,12 @@ from typing import Any
 from pendulum_lqg.learn.runs import RunContext, run_root, versions, write_json
 
 
-def identified_rounds(ctx: RunContext) -> list[Any]:
-    """The rounds of the closed-loop identification of run ``ctx.seed`` on ``ctx.suite``."""
+def identified_rounds(ctx: RunContext, *, steps: int | None) -> list[Any]:
+    """The rounds of the closed-loop identification of run ``ctx.seed`` on ``ctx.suite`` with a
+    budget of ``steps`` logged env steps (``None``: the default recipe)."""
     from pendulum_lqg.learn.closed_loop import identify_closed_loop
 
-    return list(identify_closed_loop(ctx.suite, root=run_root(ctx.seed), steps=ctx.steps,
+    return list(identify_closed_loop(ctx.suite, root=run_root(ctx.seed), steps=steps,
                                      log=ctx.log))
 
 
@@ -53,7 +54,7 @@ def train_sysid_lqg(ctx: RunContext) -> list[Path]:
         raise ConfigError(f"--resume: {ctx.method} is not resumed (an identification takes under "
                           "a minute); start it again with --force")
     curve = Curve(ctx.suite, ctx.path("-curve.csv"), name=ctx.name, log=ctx.log)
-    rounds = identified_rounds(ctx)
+    rounds = identified_rounds(ctx, steps=ctx.steps)
     if not rounds:
         raise ConfigError(f"{ctx.name}: the identification gave no controller")
     doc: dict[str, Any] = {}
