@@ -142,34 +142,48 @@ REDUCED: dict[str, tuple[str, str]] = {
         ("pendulum-lqg score --agent linear:experiments/agents/models/ars-history-seed0.json "
          "--suite all --episodes 2 --out docs/leaderboard/scores/rl_ars-history-seed0.json",
          "7 suites × 100 episodes: 2 each"),
-    "uv run python benchmarks/rl_figures.py profile docs/leaderboard/scores":
-        ("python benchmarks/rl_figures.py profile reduced/scores",
-         "bootstrap intervals over every score file: over the reference's and two runs each of "
-         "two methods (reduced/scores, a copy of those files)"),
-    "python benchmarks/train_linear.py ars-history --seed 0":
-        ("python benchmarks/train_linear.py ars-history --seed 0 --steps 400 --eval-every 200",
-         "a training run of 1 000 000 env steps: 400"),
+    "pendulum-lqg train sysid-lqg --seed 0 --out runs/sysid":
+        ("pendulum-lqg train sysid-lqg --seed 0 --steps 20000 --out runs/sysid",
+         "the default recipe logs about 70 000 steps: a budget of 20 000"),
+    "pendulum-lqg score --agent linear:runs/sysid/sysid-lqg-seed0.json --suite lecture":
+        ("pendulum-lqg score --agent linear:runs/sysid/sysid-lqg-seed0.json --suite lecture "
+         "--episodes 4", "100 episodes: 4"),
+    "pendulum-lqg train sysid-lqg --seed 0 --suite delayed --out runs/delayed":
+        ("pendulum-lqg train sysid-lqg --seed 0 --suite delayed --steps 20000 --out runs/delayed",
+         "the default recipe logs about 70 000 steps: a budget of 20 000"),
+    "pendulum-lqg train ars-history --seed 0 --out runs/linear":
+        ("pendulum-lqg train ars-history --seed 0 --steps 400 --eval-every 200 --out runs/linear",
+         "a training run of 300 000 env steps: 400"),
+    "pendulum-lqg train sysid-openloop --seed 0 --out runs/linear":
+        ("pendulum-lqg train sysid-openloop --seed 0 --steps 5000 --out runs/linear",
+         "1 000 000 logged steps: 5 000"),
+    "pendulum-lqg train ls-clone --seed 0 --out runs/clone":
+        ("pendulum-lqg train ls-clone --seed 0 --steps 2000 --out runs/clone",
+         "20 000 closed-loop samples of the fit: 2 000 (the identification it clones runs whole)"),
+    "pendulum-lqg train ars-history-clone --seed 0 --init runs/clone/ls-clone-seed0.json --out runs/clone":
+        ("pendulum-lqg train ars-history-clone --seed 0 --init runs/clone/ls-clone-seed0.json "
+         "--steps 400 --eval-every 200 --out runs/clone", "a training run of 300 000 env steps: 400"),
+    "uv run python -m pendulum_lqg.learn.price run --out docs/leaderboard/price.csv --force":
+        ("python -m pendulum_lqg.learn.price run --suites lecture --seeds 0 --budgets 5000 "
+         "--out price.csv", "70 identifications of up to 500 000 steps: one of 5 000, into the "
+         "scratch folder (the figure below reads the committed CSV)"),
 }
 #: commands that need the ``rl`` extra (torch, stable-baselines3): documented command → the
 #: reduced form run where torch is installed (skipped, with this reason, where it is not)
 NEEDS_RL: dict[str, str] = {
-    "python benchmarks/train_agents.py ppo-history --seed 3":
-        "python benchmarks/train_agents.py ppo-history --seed 3 --steps 256 --eval-every 128",
-    "python benchmarks/train_agents.py ppo-history --seed 0 --noise-scale 0.25":
-        "python benchmarks/train_agents.py ppo-history --seed 0 --noise-scale 0.25 --steps 256 "
-        "--eval-every 128",
+    "pendulum-lqg train ppo-history --seed 3 --out runs/ppo-history-seed3":
+        "pendulum-lqg train ppo-history --seed 3 --steps 256 --eval-every 128 --out runs/ppo-history-seed3",
+    "pendulum-lqg train ppo-history --seed 3 --steps 4000 --eval-every 2000":
+        "pendulum-lqg train ppo-history --seed 3 --steps 256 --eval-every 128",
+    "pendulum-lqg train ppo-history --seed 0 --noise-scale 0.25 --out runs/ladder":
+        "pendulum-lqg train ppo-history --seed 0 --noise-scale 0.25 --steps 256 --eval-every 128 "
+        "--out runs/ladder",
     "pendulum-lqg score --agent sb3:experiments/agents/models/ppo-history-seed3.zip --suite all --out rl_ppo-history-seed3.json":  # noqa: E501 (a documented line, as the page shows it)
         "pendulum-lqg score --agent sb3:experiments/agents/models/ppo-history-seed3.zip --suite lecture "
         "--episodes 2 --out rl_ppo-history-seed3.json",
     "uv run pendulum-lqg score --agent sb3:experiments/agents/models/ppo-history-seed0.zip --suite lecture":
         "pendulum-lqg score --agent sb3:experiments/agents/models/ppo-history-seed0.zip --suite lecture "
         "--episodes 2",
-    "python benchmarks/noise_ladder.py score experiments/agents/models/ppo-history-seed*.zip":
-        "python benchmarks/noise_ladder.py score experiments/agents/models/ppo-history-seed0.zip "
-        "--episodes 2 --scores scores/ladder",
-    "python benchmarks/noise_ladder.py score --matched experiments/agents/models/ppo-history-noise*-seed*.zip":  # noqa: E501 (a documented line, as the page shows it)
-        "python benchmarks/noise_ladder.py score --matched "
-        "experiments/agents/models/ppo-history-noise0.25-seed0.zip --episodes 2 --scores scores/ladder",
 }
 _INSTALL = "installs into the environment the tests run in (CI installs the wheel in a fresh one)"
 _PERF_OLD = ("performance.md's comparison with 0.4.1 and 0.3.4, run on git worktrees of those "
@@ -177,6 +191,12 @@ _PERF_OLD = ("performance.md's comparison with 0.4.1 and 0.3.4, run on git workt
              "below in its own block")
 #: documented command → why the test does not run it
 NOT_RUN: dict[str, str] = {
+    **dict.fromkeys(["uv run python benchmarks/instructions.py env --public",
+                     "uv run python benchmarks/instructions.py vector",
+                     "uv run python benchmarks/instructions.py loop"],
+                    "an instruction count under valgrind, whose start-up alone costs tens of "
+                    "seconds: `instructions.py env --steps 20` runs the script's valgrind path; "
+                    "these change only the workload it counts"),
     "uv sync --compile-bytecode": _INSTALL,
     "uv sync --group docs": _INSTALL,
     "uv build --wheel": "builds the wheel into dist/ of the checkout (CI's package job builds it)",
@@ -201,15 +221,6 @@ NOT_RUN: dict[str, str] = {
     "ray start --head --port 6379": "starts a Ray cluster's head (a server)",
     "ray start --address HEAD_HOST:6379": "joins a Ray cluster on another machine",
     "pendulum-lqg bench mismatch --executor ray --address auto": "needs a running Ray cluster",
-    "python benchmarks/train_linear.py sysid-lqg --seed 0":
-        "identifies from 1 000 000 logged steps and has no budget option (minutes); "
-        "tests/design/test_sysid.py tests the identification and the LQG design it feeds",
-    **dict.fromkeys(["uv run python benchmarks/instructions.py env --public",
-                     "uv run python benchmarks/instructions.py vector",
-                     "uv run python benchmarks/instructions.py loop"],
-                    "an instruction count under valgrind, whose start-up alone costs tens of "
-                    "seconds: `instructions.py env --steps 20` runs the script's valgrind path; "
-                    "these change only the workload it counts"),
     "uv run python benchmarks/leaderboard.py --out docs/leaderboard --force":
         "rescores the committed leaderboard (18 entries × 7 suites × 100 episodes) and has no "
         "budget option; it calls score_entry, which the score commands of the same page run",
