@@ -13,48 +13,37 @@ thread; the fits are numpy. Measure on a quiet machine: the time is shared with 
 
 from __future__ import annotations
 
-import argparse
 import statistics
-import sys
 import time
+
+from pendulum_lqg.util.scripts import ScriptParser, int_in, run_script
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = ScriptParser(description=__doc__.splitlines()[0])
     ap.add_argument("--suite", default="lecture", help="suite name or file (default lecture)")
-    ap.add_argument("--seed", type=int, default=0, help="data seed S: root 500 000 + 1000·S")
-    ap.add_argument("--steps", type=int, default=None,
+    ap.add_argument("--seed", type=int_in(0, 10**6), default=0,
+                    help="data seed S: root 500 000 + 1000·S")
+    ap.add_argument("--steps", type=int_in(1, 10**8), default=None,
                     help="logged env-step budget (default: the default recipe)")
-    ap.add_argument("--repeat", type=int, default=1, help="runs (default 1)")
+    ap.add_argument("--repeat", type=int_in(1, 100), default=1, help="runs (default 1)")
     args = ap.parse_args(argv)
-    if args.seed < 0:
-        ap.error(f"--seed: expected a non-negative integer, got {args.seed}")
-    if args.repeat < 1:
-        ap.error(f"--repeat: expected a positive integer, got {args.repeat}")
-    if args.steps is not None and args.steps < 1:
-        ap.error(f"--steps: expected a positive integer, got {args.steps}")
 
-    from pendulum_lqg.errors import PendulumLQGError
     from pendulum_lqg.learn.closed_loop import identify_closed_loop
     from pendulum_lqg.scoreboard.suites import load_suite
 
-    try:
-        suite = load_suite(args.suite)
-        times = []
-        for i in range(args.repeat):
-            t0 = time.perf_counter()
-            final = identify_closed_loop(suite, root=500_000 + 1000 * args.seed,
-                                         steps=args.steps)[-1]
-            times.append(time.perf_counter() - t0)
-            print(f"run {i + 1}: {times[-1]:.1f} s ({final.logged_steps:,} logged, "
-                  f"{final.stepped_steps:,} stepped env steps)", flush=True)
-    except PendulumLQGError as exc:
-        print(f"error: {' '.join(str(exc).split())}", file=sys.stderr)
-        return 2
+    suite = load_suite(args.suite)
+    times = []
+    for i in range(args.repeat):
+        t0 = time.perf_counter()
+        final = identify_closed_loop(suite, root=500_000 + 1000 * args.seed, steps=args.steps)[-1]
+        times.append(time.perf_counter() - t0)
+        print(f"run {i + 1}: {times[-1]:.1f} s ({final.logged_steps:,} logged, "
+              f"{final.stepped_steps:,} stepped env steps)", flush=True)
     print(f"identification of {suite.name} seed {args.seed}: median {statistics.median(times):.1f} s "
           f"over {len(times)} run(s)")
     return 0
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    run_script(main)

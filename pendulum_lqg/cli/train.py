@@ -48,7 +48,7 @@ def add_train_parser(sub: Any) -> None:
                    help="env steps between curve points (default 50 000)")
     g.add_argument("--noise-scale", default=None, metavar="X",
                    help="SB3 methods: train at the suite's env with noise_scale X, the noise "
-                        "ladder; writes METHOD-noiseX-seedS")
+                        "ladder; writes METHOD-noiseX-seedS (default: the suite's own noise)")
     g.add_argument("--frames", default=None, metavar="K",
                    help="ARS and ls-clone: the history length K (default 64)")
     g.add_argument("--alpha", default=None, metavar="A",
@@ -56,7 +56,8 @@ def add_train_parser(sub: Any) -> None:
     g.add_argument("--nu", default=None, metavar="V",
                    help="ARS: exploration ν (default 0.03; from a clone 5e-4)")
     g.add_argument("--init", default=None, metavar="FILE",
-                   help="ars-history-clone: the ls-clone controller file ARS starts from")
+                   help="ars-history-clone: the ls-clone controller file ARS starts from "
+                        "(default: none; that method requires it)")
 
 
 def cmd_train(args: argparse.Namespace) -> int:

@@ -45,6 +45,8 @@ BAD_FLAGS = [
                                            "got '1e12'"),
     ("executor_benchmark", ["--episodes", "-3"], "--episodes: expected an integer from 1 to "
                                                  "100,000, got '-3'"),
+    ("identify_benchmark", ["--repeat", "0"], "--repeat: expected an integer from 1 to 100, "
+                                              "got '0'"),
     ("instructions", ["loop", "--episodes", "0"], "--episodes: expected an integer from 1 to "
                                                   "100,000, got '0'"),
     ("leaderboard", ["--frames", "5"], "unrecognized arguments: --frames 5"),

@@ -287,7 +287,7 @@ def test_every_subcommand_and_option_has_help():
     parser = build_parser()
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     assert set(sub.choices) == {"design", "run", "bench", "report", "perf", "score", "board",
-                                "theory"}
+                                "theory", "train"}
     for name, p in sub.choices.items():
         assert p.description, f"{name} has no description"
         for action in p._actions:

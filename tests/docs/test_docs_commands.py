@@ -171,6 +171,13 @@ REDUCED: dict[str, tuple[str, str]] = {
 #: commands that need the ``rl`` extra (torch, stable-baselines3): documented command → the
 #: reduced form run where torch is installed (skipped, with this reason, where it is not)
 NEEDS_RL: dict[str, str] = {
+    "python -m pendulum_lqg.learn.noise_ladder score experiments/agents/models/ppo-history-seed*.zip --scores docs/leaderboard/noise_ladder --force":  # noqa: E501 (a documented line, as the page shows it)
+        "python -m pendulum_lqg.learn.noise_ladder score experiments/agents/models/ppo-history-seed0.zip "
+        "--episodes 2 --scores scores/ladder --force",
+    "python -m pendulum_lqg.learn.noise_ladder score --matched experiments/agents/models/ppo-history-noise*-seed*.zip --scores docs/leaderboard/noise_ladder --force":  # noqa: E501 (a documented line, as the page shows it)
+        "python -m pendulum_lqg.learn.noise_ladder score --matched "
+        "experiments/agents/models/ppo-history-noise0.25-seed0.zip --episodes 2 --scores scores/ladder "
+        "--force",
     "pendulum-lqg train ppo-history --seed 3 --out runs/ppo-history-seed3":
         "pendulum-lqg train ppo-history --seed 3 --steps 256 --eval-every 128 --out runs/ppo-history-seed3",
     "pendulum-lqg train ppo-history --seed 3 --steps 4000 --eval-every 2000":
