@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 
 os.environ.setdefault("MUJOCO_GL", "egl")
-# Ray reads this when it is imported, and tests/bench/test_ray.py imports Ray before the executor
+# Ray reads this when it is imported, and tests/bench/test_executors_ray.py imports Ray before the executor
 # can set it (pendulum_lqg.bench.executors explains why workers stay in this environment).
 os.environ.setdefault("RAY_ENABLE_UV_RUN_RUNTIME_ENV", "0")
 

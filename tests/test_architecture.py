@@ -254,3 +254,85 @@ def test_the_top_level_holds_packages_and_a_few_named_modules():
     assert all(f"`{m}`" in text for m in TOP_LEVEL_MODULES - {"__init__.py"})
     packages = {p.parent.name for p in PKG.glob("*/__init__.py")}
     assert all(f"`{p}/`" in text for p in packages), packages
+
+
+def _packages() -> list[Path]:
+    """Every package folder below the root (``core/physics`` included), sorted."""
+    return sorted(p.parent for p in PKG.rglob("__init__.py") if p.parent != PKG)
+
+
+def _package_modules(package: Path) -> set[str]:
+    """The modules of ``package`` as a table names them: ``name`` for a file, ``name/`` for a
+    sub-package."""
+    files = {f.stem for f in package.glob("*.py") if f.stem != "__init__"}
+    return files | {d.name + "/" for d in package.iterdir() if (d / "__init__.py").is_file()}
+
+
+def _docstring_module_table(package: Path) -> set[str]:
+    """The ``name`` cells of the first column of the package docstring's reST table whose header
+    is ``module``."""
+    doc = ast.get_docstring(ast.parse((package / "__init__.py").read_text(encoding="utf-8"))) or ""
+    lines = doc.splitlines()
+    for i, line in enumerate(lines[1:], 1):
+        if line.split()[:1] == ["module"] and lines[i - 1].startswith("="):
+            width = len(lines[i - 1].split()[0])
+            names: set[str] = set()
+            for row in lines[i + 2:]:
+                if row.startswith("="):
+                    return names
+                names.update(re.findall(r"``([^`]+)``", row[:width + 1]))
+    return set()
+
+
+def test_each_package_lists_exactly_its_modules():
+    """Each package's ``__init__`` docstring has a ``module`` table, and docs/architecture.md's
+    module index a row, naming exactly the package's modules — a new or removed module fails here
+    until both say so."""
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    index = text[text.index("## Module index"):]
+    rows = dict(re.findall(r"^\| `([a-z_/]+)/` \| (.*) \|$", index, flags=re.M))
+    for package in _packages():
+        rel = package.relative_to(PKG).as_posix()
+        modules = _package_modules(package)
+        assert _docstring_module_table(package) == modules, rel
+        assert set(re.findall(r"`([^`]+)`", rows.get(rel, ""))) == modules, rel
+    assert set(rows) == {p.relative_to(PKG).as_posix() for p in _packages()}
+
+
+def test_the_module_table_reader_sees_a_missing_module(tmp_path):
+    package = tmp_path / "pkg"
+    package.mkdir()
+    (package / "__init__.py").write_text('"""P.\n\n=======  ====\nmodule   what\n=======  ====\n'
+                                         '``a``    A\n=======  ====\n"""\n')
+    (package / "a.py").write_text("")
+    assert _docstring_module_table(package) == _package_modules(package) == {"a"}
+    (package / "b.py").write_text("")
+    assert _docstring_module_table(package) != _package_modules(package)
+
+
+#: Test folders that mirror no package: the documentation's commands and tutorials, and the
+#: plug-in fixtures the policy tests load.
+TEST_FOLDERS_OF_NO_PACKAGE = {"docs", "plugins", "data"}
+
+
+def test_the_tests_mirror_the_package():
+    """``tests/<package>/test_<module>[_<topic>].py`` (``<module>`` a module of the package or the
+    package's own name), ``tests/benchmarks/test_<script>…`` for the scripts; at the top only this
+    file. Every package has its test folder."""
+    tests = ROOT / "tests"
+    scripts = {p.stem for p in (ROOT / "benchmarks").glob("*.py")} | {"benchmarks"}
+    for path in sorted(tests.rglob("test_*.py")):
+        rel = path.relative_to(tests)
+        if rel.parts[0] in TEST_FOLDERS_OF_NO_PACKAGE or rel == Path("test_architecture.py"):
+            continue
+        package = PKG.joinpath(*rel.parts[:-1])
+        if rel.parts[0] == "benchmarks":
+            names = scripts
+        else:
+            assert (package / "__init__.py").is_file(), f"{rel}: no package pendulum_lqg/{rel.parent}"
+            names = {m.rstrip("/") for m in _package_modules(package)} | {package.name}
+        stem = path.stem.removeprefix("test_")
+        assert any(stem == n or stem.startswith(n + "_") for n in names), \
+            f"{rel}: named for none of {sorted(names)}"
+    missing = {q.parent.name for q in PKG.glob("*/__init__.py") if not (tests / q.parent.name).is_dir()}
+    assert not missing, f"packages without a test folder: {sorted(missing)}"

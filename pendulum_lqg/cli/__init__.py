@@ -1,11 +1,22 @@
 """The ``pendulum-lqg`` command: ``design``, ``run``, ``bench``, ``perf``, ``report``, ``score``,
 ``board``, ``theory``, ``train``.
 
-Modules: ``parser`` (the grammar and the arguments' conversions), ``design``, ``commands``,
-``score``, ``theory``, ``lti`` and ``train`` (one function per subcommand). Only argument parsing
-and presentation live here; every computation is a library call. Heavy imports (numpy, MuJoCo,
-python-control, rich) happen inside the commands so ``--help`` is instant. Bad input prints one
-line ``error: …`` naming the parameter and exits with status 2.
+============  ========================================================================
+module        concept
+============  ========================================================================
+``parser``    the grammar and the arguments' conversions
+``design``    ``design``: the linearised model and every design
+``commands``  ``run``, ``bench``, ``report`` and ``perf``
+``score``     ``score`` and ``board``
+``theory``    ``theory``: built-in linear policies in closed form
+``lti``       ``run --lti FILE``: episodes of a plant given as matrices
+``train``     ``train``: one training run of one method
+``__main__``  ``python -m pendulum_lqg.cli``
+============  ========================================================================
+
+Only argument parsing and presentation live here; every computation is a library call. Heavy
+imports (numpy, MuJoCo, python-control, rich) happen inside the commands so ``--help`` is instant.
+Bad input prints one line ``error: …`` naming the parameter and exits with status 2.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The defaults of an episode, written once: :class:`~pendulum_lqg.core.scenario.Scenario`'s fields
 take them, and the environments' keywords, the CLI's options and the experiment files' ``[scenario]``
 tables take theirs from here (this module imports nothing, so the CLI builds its parser without
-numpy). ``tests/test_defaults.py`` holds them equal."""
+numpy). ``tests/core/test_defaults.py`` holds them equal."""
 
 from __future__ import annotations
 

@@ -15,6 +15,9 @@ module                 contents
 ``discretize``         :func:`zoh`, :func:`euler`, :func:`process_noise_covariance`,
                        :func:`sampled_cost`
 ``delay``              :func:`augment_delays`: integer-period measurement / actuator delay lines
+``checks``             the one validation helper of matrix arguments
+``sysid``              nominal identification: a linear model from logged (y, u) by least squares
+``pem``                prediction-error identification of the innovations form, under feedback
 =====================  =====================================================================
 """
 

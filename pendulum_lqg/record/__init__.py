@@ -1,7 +1,13 @@
 """Rerun recordings of episodes: 3-D scene, time series, estimator internals and a blueprint.
 
-Modules: ``writer`` (:func:`record_episodes`), ``scene`` (the MJCF geometry as Rerun archetypes),
-``documents`` (the Markdown panels), ``reader`` (:func:`read_recording`, :func:`verify_recording`).
+=============  ========================================================================
+module         concept
+=============  ========================================================================
+``writer``     :func:`record_episodes`: every episode's samples as columns, the blueprint
+``scene``      the MJCF geometry as Rerun archetypes
+``documents``  the Markdown panels: configuration, outcomes, summary
+``reader``     :func:`read_recording`, :func:`verify_recording`
+=============  ========================================================================
 
 :func:`record_episodes` turns the :class:`~pendulum_lqg.core.trajectory.Trajectory` objects that
 ``run_episodes(..., trajectory=True)`` returns into one Rerun recording (a ``.rrd`` file and/or a

@@ -224,7 +224,7 @@ NOT_RUN: dict[str, str] = {
     "uv run rerun --web-viewer luenberger.rrd": "starts the Rerun web viewer (a server)",
     "uv run rerun luenberger.rrd": "opens the Rerun viewer (a window)",
     "uv run --extra ray pendulum-lqg bench lecture --executor ray":
-        "starts a local Ray instance; tests/bench/test_ray.py runs bench --executor ray on one",
+        "starts a local Ray instance; tests/bench/test_executors_ray.py runs bench --executor ray on one",
     "ray start --head --port 6379": "starts a Ray cluster's head (a server)",
     "ray start --address HEAD_HOST:6379": "joins a Ray cluster on another machine",
     "pendulum-lqg bench mismatch --executor ray --address auto": "needs a running Ray cluster",

@@ -1,5 +1,5 @@
-"""Plugins for tests/test_plugins.py: the built-in designs behind the plugin protocol, and broken
-plugins (each breaks one rule of the protocol)."""
+"""Plugins for tests/policies/test_loading_plugins.py: the built-in designs behind the plugin
+protocol, and broken plugins (each breaks one rule of the protocol)."""
 
 from __future__ import annotations
 

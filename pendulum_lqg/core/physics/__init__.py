@@ -8,6 +8,15 @@ backend               what steps the plant                                      
 ``linear-zoh/euler``  the model's linearisation (``Scenario.plant``), numpy       linear
 ====================  ==========================================================  ============
 
+================  ======================================================================
+module            concept
+================  ======================================================================
+``base``          :class:`~pendulum_lqg.core.physics.base.Physics`, the interface
+``mujoco_batch``  ``"rollout"``: MuJoCo's batch rollout
+``mujoco_step``   ``"step"``: the plain ``mj_step`` loop
+``linear``        the exact (or Euler) linear step
+================  ======================================================================
+
 All MuJoCo backends start each period from ``mj_resetData`` with the row's state written in, so
 they give bit-identical states. A new backend is one class in one new file implementing
 :class:`~pendulum_lqg.core.physics.base.Physics`, and a branch in :func:`make_physics`.

@@ -14,7 +14,7 @@ from pendulum_lqg.model.lti import load_lti
 from pendulum_lqg.policies.loading import resolve_ref
 from pendulum_lqg.util.resources import data_dir, find_file
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 #: What stays out of the wheel: trained models, their training records and curves, the pilot's runs.
 NOT_SHIPPED = ("experiments/agents/models", "experiments/agents/pilot")
 

@@ -21,7 +21,7 @@ from pendulum_lqg.model.plant import load_plant
 from pendulum_lqg.policies.loading import PolicyContext, build_policy
 from pendulum_lqg.util.resources import data_dir
 
-HERE = Path(__file__).parent
+HERE = Path(__file__).resolve().parents[1]
 PLUGINS = HERE / "plugins" / "lqg_plugins.py"
 EXAMPLES = data_dir("experiments")
 

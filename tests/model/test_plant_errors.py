@@ -9,7 +9,7 @@ from conftest import assert_one_line_error, run_cli
 
 from pendulum_lqg.errors import ConfigError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MODEL = ROOT / "models" / "cartpole.xml"
 
 

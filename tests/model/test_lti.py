@@ -14,7 +14,7 @@ from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.lti import load_lti, lti_from_mapping
 from pendulum_lqg.policies.lti import design_lti_policy, lti_scenario, lti_theory
 
-EXPERIMENTS = Path(__file__).resolve().parents[1] / "experiments" / "lti"
+EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments" / "lti"
 
 
 def test_double_integrator_designs_tend_to_the_continuous_ones():
