@@ -10,7 +10,14 @@ to the instruction:
   of 0.1 N from the upright at rest (the state is put back before each step, so every step does
   the same work): what the single env's Python costs on top of its 10 physics steps;
 * ``vector`` — ``--steps`` steps of the native vector env (64 envs) driven by the LQG agent;
-* ``loop`` — one ``run_episodes`` of ``--episodes`` DLQR + Kalman episodes of 2 s, one thread.
+* ``loop`` — one ``run_episodes`` of ``--episodes`` DLQR + Kalman episodes of 2 s, one thread;
+* ``import`` — ``import pendulum_lqg.cli`` once, in a fresh interpreter (what every command pays
+  before it parses its arguments; bytecode already compiled);
+* ``design`` — ``pendulum-lqg design`` once, imports included, its output discarded.
+
+The last two run once (no warm-up: a module is imported once) with ``PYTHONHASHSEED=0`` so that
+two runs of one version count the same set-ups, after compiling the package's bytecode (an edited
+module left uncompiled would count the compiler, several times the import itself).
 
 Instructions are not time — a cache miss costs more than an add — but a difference in
 instructions of the Python around the physics is a difference in work. ``--tree`` runs another
@@ -21,6 +28,8 @@ Usage::
     uv run python benchmarks/instructions.py env [--steps 1000] [--tree PATH]
     uv run python benchmarks/instructions.py vector [--steps 100]
     uv run python benchmarks/instructions.py loop [--episodes 64]
+    uv run python benchmarks/instructions.py import [--tree PATH]
+    uv run python benchmarks/instructions.py design [--tree PATH]
     uv run python benchmarks/instructions.py env --public   # DIRECT_CALL off: the public rollout
     uv run python benchmarks/instructions.py env --out env.callgrind   # keep the profile, then
     callgrind_annotate --inclusive=yes env.callgrind | head -60         # per-function counts
@@ -37,6 +46,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 #: Ceiling of --steps (env or vector steps counted under Valgrind, about 50× slower than native).
@@ -45,14 +55,17 @@ MAX_STEPS = 10**6
 
 def workload(kind: str, count: int, public: bool = False) -> None:
     """Run the workload, counting only its timed part (called inside Valgrind)."""
+    def counting(on: bool) -> None:
+        subprocess.run(["callgrind_control", "-i", "on" if on else "off", str(os.getpid())],
+                       capture_output=True, check=False)
+
+    if kind in ("import", "design"):
+        once(kind, counting)
+        return
     import gymnasium as gym
     import numpy as np
 
     import pendulum_lqg
-
-    def counting(on: bool) -> None:
-        subprocess.run(["callgrind_control", "-i", "on" if on else "off", str(os.getpid())],
-                       capture_output=True, check=False)
 
     if kind == "env":
         env = gym.make(pendulum_lqg.ENV_ID)
@@ -92,6 +105,20 @@ def workload(kind: str, count: int, public: bool = False) -> None:
     counting(False)
 
 
+def once(kind: str, counting: Callable[[bool], None]) -> None:
+    """``import pendulum_lqg.cli`` or one ``pendulum-lqg design``, counted whole, once."""
+    import contextlib
+    import importlib
+    import io
+
+    counting(True)
+    cli = importlib.import_module("pendulum_lqg.cli")
+    if kind == "design":
+        with contextlib.redirect_stdout(io.StringIO()):
+            cli.main(["design"])
+    counting(False)
+
+
 def inner(argv: list[str]) -> None:
     """The workload inside Valgrind (``--inner``): it imports nothing of the package before the
     workload does, so that ``--tree`` may name a checkout of any version."""
@@ -113,7 +140,7 @@ def main(argv: list[str] | None = None) -> None:
     from pendulum_lqg.util.scripts import ScriptParser, int_in
 
     ap = ScriptParser(description=__doc__.splitlines()[0])
-    ap.add_argument("kind", choices=["env", "vector", "loop"])
+    ap.add_argument("kind", choices=["env", "vector", "loop", "import", "design"])
     ap.add_argument("--steps", type=int_in(1, MAX_STEPS), default=None,
                     help="env or vector steps (1000 / 100)")
     ap.add_argument("--episodes", type=int_in(1, MAX_BATCH_EPISODES), default=64,
@@ -126,8 +153,8 @@ def main(argv: list[str] | None = None) -> None:
                     help="keep callgrind's profile in this file (for callgrind_annotate)")
     ap.add_argument("--inner", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    count = args.episodes if args.kind == "loop" else (args.steps or
-                                                       (1000 if args.kind == "env" else 100))
+    count = 1 if args.kind in ("import", "design") else args.episodes if args.kind == "loop" \
+        else (args.steps or (1000 if args.kind == "env" else 100))
     out = None if args.out is None else output_file("--out", args.out, what="callgrind profile")
     if args.tree and not (Path(args.tree) / "pendulum_lqg").is_dir():
         raise ConfigError(f"--tree: expected a checkout holding pendulum_lqg/, got {args.tree!r}")
@@ -136,6 +163,13 @@ def main(argv: list[str] | None = None) -> None:
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
     if args.tree:
         env["PYTHONPATH"] = os.path.abspath(args.tree)
+    if args.kind in ("import", "design"):        # the same dict and set orders in both versions
+        env["PYTHONHASHSEED"] = "0"
+        # the package's bytecode compiled first (as an install does), so that neither version's
+        # count holds the compiler: PYTHONDONTWRITEBYTECODE keeps an edited module uncompiled
+        tree = Path(args.tree or Path(__file__).resolve().parents[1]) / "pendulum_lqg"
+        subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree)], capture_output=True,
+                       check=False)
     with tempfile.TemporaryDirectory() as tmp:
         # callgrind writes its profile itself: into the temporary folder, then moved whole to --out
         profile = f"{tmp}/callgrind.out"
@@ -154,7 +188,8 @@ def main(argv: list[str] | None = None) -> None:
                 shutil.copyfile(profile, kept)
     total = int(found.group(1).replace(",", ""))
     what = {"env": "env.step", "vector": "vector step (64 envs, with the agent)",
-            "loop": "episode (2 s, DLQR + Kalman, one thread)"}[args.kind]
+            "loop": "episode (2 s, DLQR + Kalman, one thread)",
+            "import": "import pendulum_lqg.cli", "design": "pendulum-lqg design"}[args.kind]
     via = " through the public Batch.rollout" if args.public else ""
     print(f"{args.kind}: {total / count / 1e3:,.1f} k instructions per {what}{via} "
           f"({total:,} over {count}; package from {args.tree or 'this checkout'})")
