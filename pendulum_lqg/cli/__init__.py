@@ -22,22 +22,31 @@ Bad input prints one line ``error: …`` naming the parameter and exits with sta
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
-from pendulum_lqg.cli.commands import cmd_bench, cmd_perf, cmd_report, cmd_run
-from pendulum_lqg.cli.design import cmd_design
 from pendulum_lqg.cli.parser import EXIT_USAGE, build_parser
-from pendulum_lqg.cli.score import cmd_board, cmd_score
-from pendulum_lqg.cli.theory import cmd_theory
-from pendulum_lqg.cli.train import cmd_train
 
 #: Exit status of a run stopped by Ctrl-C (128 + SIGINT, as a shell reports it).
 EXIT_INTERRUPTED = 130
 
-COMMANDS = {"design": cmd_design, "run": cmd_run, "bench": cmd_bench, "perf": cmd_perf,
-            "report": cmd_report, "score": cmd_score, "board": cmd_board, "theory": cmd_theory,
-            "train": cmd_train}
+#: Each command's module and function. A command's module is imported when it runs, not when
+#: the CLI starts: every invocation pays for the grammar, only one pays for its command.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "design": ("design", "cmd_design"), "run": ("commands", "cmd_run"),
+    "bench": ("commands", "cmd_bench"), "perf": ("commands", "cmd_perf"),
+    "report": ("commands", "cmd_report"), "score": ("score", "cmd_score"),
+    "board": ("score", "cmd_board"), "theory": ("theory", "cmd_theory"),
+    "train": ("train", "cmd_train")}
+
+
+def command(name: str) -> Callable[[argparse.Namespace], int]:
+    """The function that runs the command ``name`` (its module imported now)."""
+    module, function = COMMANDS[name]
+    handler: Callable[[argparse.Namespace], int] = getattr(
+        importlib.import_module(f"pendulum_lqg.cli.{module}"), function)
+    return handler
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -54,7 +63,7 @@ def _dispatch(args: argparse.Namespace) -> int:
     from pendulum_lqg.errors import PendulumLQGError
 
     try:
-        return COMMANDS[args.command](args)
+        return command(args.command)(args)
     except PendulumLQGError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_USAGE
