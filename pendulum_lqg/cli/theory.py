@@ -6,11 +6,13 @@ the Scenario fields of the limit options ``run`` shares (the grammar of both is 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 from typing import Any
 
 from pendulum_lqg.core import defaults
+from pendulum_lqg.model.lti import LTIPlant
 
 #: ``theory``'s further options of the cart-pole, refused with ``--lti`` (beside
 #: :data:`~pendulum_lqg.cli.lti.CARTPOLE_OPTIONS`).
@@ -149,7 +151,6 @@ def run_theory_lines(plant: Any, scenario: Any, policy: Any) -> tuple[dict[str, 
     limits off, as ``(to_dict() or None, lines to print)``; a loop the theory does not model
     (plug-ins, delays, dropout, lags, force noise) gives ``None`` and one line saying why."""
     from pendulum_lqg.errors import PendulumLQGError
-    from pendulum_lqg.policies.theory import policy_theory
 
     if getattr(policy, "K", None) is None or getattr(policy, "estimator", None) is None:
         return None, ["theory: not for this loop (a plug-in policy; the theory takes the "
@@ -157,18 +158,7 @@ def run_theory_lines(plant: Any, scenario: Any, policy: Any) -> tuple[dict[str, 
     if not scenario.randomize.is_empty():
         return None, ["theory: not for this loop (randomised plants)"]
     try:
-        if getattr(plant, "is_lti", False):
-            from pendulum_lqg.policies.lti import lti_theory
-
-            name = str(policy.name)
-            for field in ("measurement_delay", "actuator_delay", "dropout"):
-                if getattr(scenario, field):
-                    raise PendulumLQGError(f"{field}: the theory covers the plain sampled loop")
-            res = lti_theory(plant, (name,), noise_scale=scenario.noise.scale,
-                             duration=scenario.n_periods * scenario.control_period,
-                             estimate0=scenario.estimate0, burn_in=scenario.burn_in)[name]
-        else:
-            res = policy_theory(plant, scenario, policy)
+        res = _loop_theory(plant, scenario, policy)
     except PendulumLQGError as exc:
         return None, [f"theory: not for this loop ({exc})"]
     ep = res.episode
@@ -179,6 +169,30 @@ def run_theory_lines(plant: Any, scenario: Any, policy: Any) -> tuple[dict[str, 
              "theory, stationary std: " + _values(names, res.std, res.u_std,
                                                    res.estimate_error_std)]
     return res.to_dict(), lines
+
+
+@functools.singledispatch
+def _loop_theory(plant: Any, scenario: Any, policy: Any) -> Any:
+    """The cart-pole's stationary loop (:func:`~pendulum_lqg.policies.theory.policy_theory`)."""
+    from pendulum_lqg.policies.theory import policy_theory
+
+    return policy_theory(plant, scenario, policy)
+
+
+@_loop_theory.register(LTIPlant)
+def _lti_loop_theory(plant: LTIPlant, scenario: Any, policy: Any) -> Any:
+    """A plant given as matrices: its own stationary loop
+    (:func:`~pendulum_lqg.policies.lti.lti_theory`), of the plain sampled loop only."""
+    from pendulum_lqg.errors import PendulumLQGError
+    from pendulum_lqg.policies.lti import lti_theory
+
+    name = str(policy.name)
+    for field in ("measurement_delay", "actuator_delay", "dropout"):
+        if getattr(scenario, field):
+            raise PendulumLQGError(f"{field}: the theory covers the plain sampled loop")
+    return lti_theory(plant, (name,), noise_scale=scenario.noise.scale,
+                      duration=scenario.n_periods * scenario.control_period,
+                      estimate0=scenario.estimate0, burn_in=scenario.burn_in)[name]
 
 
 def _values(names: tuple[str, ...], x: dict[str, float], u: float, err: dict[str, float]) -> str:

@@ -15,13 +15,39 @@ State ``x = [p, θ, ṗ, θ̇]``, input the cart force [N], output ``y = [p, θ]
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import mujoco
 import numpy as np
 
 from pendulum_lqg.design import zoh
 from pendulum_lqg.design.structure import StructureReport, structure
-from pendulum_lqg.model.plant import Plant, steps_per_period
+from pendulum_lqg.model.interface import SimulatedPlant, steps_per_period
+
+
+class Plant(SimulatedPlant, Protocol):
+    """What the linearisation reads of the cart-pole (:class:`pendulum_lqg.model.plant.Plant`,
+    whose :meth:`~pendulum_lqg.model.plant.Plant.linear_model` calls :func:`linearize`: a
+    structural type, so this module does not import the one that imports it)."""
+
+    @property
+    def model(self) -> mujoco.MjModel: ...
+    @property
+    def qpos_index(self) -> np.ndarray: ...
+    @property
+    def qvel_index(self) -> np.ndarray: ...
+    @property
+    def sensor_index(self) -> np.ndarray: ...
+    @property
+    def gravity(self) -> float: ...
+    @property
+    def cart_mass(self) -> float: ...
+    @property
+    def pole_mass(self) -> float: ...
+    @property
+    def pole_com(self) -> float: ...
+    @property
+    def pole_inertia_com(self) -> float: ...
 
 #: Finite-difference step for states and inputs (central differences: error O(eps²)).
 FD_EPS = 1e-6
