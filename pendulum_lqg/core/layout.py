@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from pendulum_lqg.model.interface import Layout, SimulatedPlant
-from pendulum_lqg.model.plant import CARTPOLE
+from pendulum_lqg.model.plant import CARTPOLE as CARTPOLE  # its old home
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
@@ -27,5 +27,3 @@ def layout(plant: SimulatedPlant, scenario: Scenario) -> Layout:
     <pendulum_lqg.model.interface.SimulatedPlant.layout>`)."""
     return plant.layout(scenario)
 
-
-__all__ = ["CARTPOLE", "Layout", "layout"]

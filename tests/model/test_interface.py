@@ -53,7 +53,7 @@ def test_the_cartpole_linear_model_is_the_linearisation():
     Phi, Gamma = plant.sampled(0.02, "linear-euler")
     np.testing.assert_allclose(Phi, np.eye(4) + 0.02 * lin.A, rtol=0, atol=1e-15)
     np.testing.assert_allclose(Gamma, 0.02 * lin.B, rtol=0, atol=1e-15)
-    with pytest.raises(ConfigError, match="^plant: expected 'linear-zoh' or 'linear-euler'"):
+    with pytest.raises(ConfigError, match=r"^plant: expected 'linear-zoh' or 'linear-euler'"):
         plant.sampled(0.02, "mujoco")
 
 
@@ -61,6 +61,7 @@ def test_the_lti_plant_samples_like_scipy_expm():
     plant = load_lti("experiments/lti/two_mass.toml")
     A, B, C, D = plant.linear_model()
     np.testing.assert_array_equal(A, plant.A)
+    np.testing.assert_array_equal(C, plant.C)
     np.testing.assert_array_equal(D, np.zeros((plant.n_outputs, plant.n_inputs)))
     T = plant.control_period
     Phi, Gamma = plant.sampled(T)
@@ -78,7 +79,7 @@ def test_a_discrete_lti_plant_has_no_continuous_model():
     assert plant.discrete
     Phi, Gamma = plant.sampled(plant.control_period)
     assert Phi is plant.Phi and Gamma is plant.Gamma
-    with pytest.raises(ConfigError, match="^A: the LTI plant .* is given in discrete time"):
+    with pytest.raises(ConfigError, match=r"^A: the LTI plant .* is given in discrete time"):
         plant.linear_model()
 
 
@@ -95,7 +96,7 @@ def test_layouts_and_limits_come_from_the_plant():
     assert lay.states == lti.state_names and lay.n == lti.n_states and lay.settle is None
     theta_max, track, u_max = lti.limits(sc)
     assert math.isinf(theta_max) and math.isinf(track) and u_max == lti.u_max
-    with pytest.raises(ConfigError, match="^plant: an LTI plant runs as its own exact sampled"):
+    with pytest.raises(ConfigError, match=r"^plant: an LTI plant runs as its own exact sampled"):
         lti.layout(sc.replace(plant="linear-euler"))
 
 
