@@ -120,3 +120,17 @@ def test_steps_per_period_moved_and_kept_its_old_homes():
     assert model_plant.steps_per_period is interface.steps_per_period
     assert core_layout.Layout is interface.Layout
     assert steps_per_period(load_plant(), 0.02) == round(0.02 / load_plant().timestep)
+
+
+def test_the_physics_factory_steps_a_plant_only_by_its_simulators():
+    from pendulum_lqg.core.physics import LinearPhysics, make_physics
+
+    lti = load_lti("experiments/lti/two_mass.toml")
+    with pytest.raises(ConfigError, match=r"^plant: expected one of linear-zoh for this plant, "
+                                          r"got 'mujoco'$"):
+        make_physics(lti, plant_kind="mujoco", backend="rollout", capacity=1, nthread=1, k=1)
+    physics = make_physics(lti, plant_kind="linear-zoh", backend="rollout", capacity=1,
+                           nthread=1, k=1)
+    assert isinstance(physics, LinearPhysics)
+    np.testing.assert_array_equal(physics.Phi, lti.Phi)
+    np.testing.assert_array_equal(physics.Gamma, lti.Gamma)        # two inputs: Γ (n, m)
