@@ -103,12 +103,9 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
     sampled slower than the loop's ceiling of the control period)."""
     from pendulum_lqg.core.noise import NoiseModel
     from pendulum_lqg.core.scenario import check_burn_in
-    from pendulum_lqg.policies.theory import (
-        StationaryProblem,
-        episode_start,
-        linear_estimator,
-        stationary,
-    )
+    from pendulum_lqg.policies.closed_loop import StationaryProblem, linear_estimator
+    from pendulum_lqg.policies.episode_theory import episode_start
+    from pendulum_lqg.policies.theory import stationary
     from pendulum_lqg.util.config import positive_number
 
     s = NoiseModel(scale=noise_scale).scale
