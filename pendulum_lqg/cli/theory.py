@@ -175,18 +175,23 @@ def run_theory_lines(plant: Any, scenario: Any, policy: Any) -> tuple[dict[str, 
     after = f" after {ep.burn_in:g} s" if ep.skip else ""
     names = res.state_names
     lines = [f"theory ({res.plant} loop, limits off), expected RMS over the episode{after}: "
-             + _values(names, ep.rms, ep.u_rms, ep.estimate_error_rms),
-             "theory, stationary std: " + _values(names, res.std, res.u_std,
+             + _values(names, ep.rms, ep.u_rms_by_input or {"u": ep.u_rms},
+                       ep.estimate_error_rms),
+             "theory, stationary std: " + _values(names, res.std,
+                                                   res.u_std_by_input or {"u": res.u_std},
                                                    res.estimate_error_std)]
     return res.to_dict(), lines
 
 
-def _values(names: tuple[str, ...], x: dict[str, float], u: float, err: dict[str, float]) -> str:
-    """``p 0.1, θ 0.02, …, u 0.3; error p 0.01, …`` with 4 significant digits."""
+def _values(names: tuple[str, ...], x: dict[str, float], u: dict[str, float],
+            err: dict[str, float]) -> str:
+    """``p 0.1, θ 0.02, …, u 0.3; error p 0.01, …`` with 4 significant digits (each input by
+    name)."""
     label = {"theta": "θ", "p_dot": "ṗ", "theta_dot": "θ̇"}
     states = ", ".join(f"{label.get(s, s)} {x[s]:.4g}" for s in names)
     errors = ", ".join(f"{label.get(s, s)} {err[s]:.4g}" for s in names)
-    return f"{states}, u {u:.4g}; estimate error {errors}"
+    inputs = ", ".join(f"{k} {v:.4g}" for k, v in u.items())
+    return f"{states}, {inputs}; estimate error {errors}"
 
 
 def _head(what: str, name: str, unit: str) -> str:

@@ -191,7 +191,8 @@ class StationaryProblem:
     """Everything :func:`stationary` needs, as matrices: plant ``(kind, Phi, Gamma)`` as in
     :func:`period_samples` with ``k`` physics steps of ``h`` seconds, output ``C``, gain ``K``,
     the estimator, per-period noise covariances ``Wd`` (n, n) and ``V`` (p, p), the cost weights
-    ``Q`` (n, n) and ``R`` (m, m)."""
+    ``Q`` (n, n) and ``R`` (m, m) of ``J = ∫ xᵀQx + 2xᵀNu + uᵀRu dt`` and its cross term ``N``
+    (n, m; ``None``: none); ``inputs`` the names of u (``None``: ``u`` for one input, ``u1 …``)."""
 
     kind: str
     Phi: np.ndarray
@@ -205,6 +206,23 @@ class StationaryProblem:
     V: np.ndarray
     Q: np.ndarray
     R: np.ndarray
+    N: np.ndarray | None = None
+    inputs: tuple[str, ...] | None = None
+
+    def input_names(self) -> tuple[str, ...]:
+        """The names of the m inputs (``inputs``, or ``u`` / ``u1 … um``)."""
+        m = self.Gamma.shape[1]
+        if self.inputs is not None:
+            return tuple(self.inputs)
+        return ("u",) if m == 1 else tuple(f"u{j + 1}" for j in range(m))
+
+    def cost_rate(self, r: Readouts) -> float:
+        """``E[xᵀQx + 2xᵀNu + uᵀRu]`` averaged over the period's physics steps, from the read-outs
+        ``r`` (:func:`readouts`): the rectangle rule of the simulated cost, term by term."""
+        rate = float(np.trace(self.Q @ r.x_steps) + np.trace(self.R @ r.u))
+        if self.N is not None and np.any(self.N):      # the cross term: E[x_j uᵀ] at each step
+            rate += 2.0 * float(np.trace(np.asarray(self.N).T @ r.xu_steps))
+        return rate
 
 
 def noise_covariance(prob: StationaryProblem) -> np.ndarray:
@@ -220,12 +238,14 @@ def noise_covariance(prob: StationaryProblem) -> np.ndarray:
 @dataclass(frozen=True)
 class Readouts:
     """From ``E[s sᵀ]`` at the sampling instants: ``z = [x; u]`` there (n+m, n+m), x over the
-    period's physics steps (n, n), u (m, m) and the estimation error ``x̂ − x`` (n, n)."""
+    period's physics steps (n, n), u (m, m), the estimation error ``x̂ − x`` (n, n) and
+    ``E[x uᵀ]`` over the physics steps (n, m; u is held over the period)."""
 
     z: np.ndarray
     x_steps: np.ndarray
     u: np.ndarray
     error: np.ndarray
+    xu_steps: np.ndarray
 
 
 def readouts(loop: AugmentedLoop, maps: list[np.ndarray], N: np.ndarray, second: np.ndarray,
@@ -241,10 +261,12 @@ def readouts(loop: AugmentedLoop, maps: list[np.ndarray], N: np.ndarray, second:
     cov_steps = [T @ cov_z @ T.T for T in maps]            # x at the start of each physics step
     cov_avg = sum(cov_steps) / len(cov_steps)
     cov_e = loop.C_e @ second @ loop.C_e.T + loop.D_e @ N @ loop.D_e.T
-    return Readouts(z=cov_z, x_steps=cov_avg, u=cov_z[n:, n:], error=cov_e)
+    xu = sum(T @ cov_z[:, n:] for T in maps) / len(maps)
+    return Readouts(z=cov_z, x_steps=cov_avg, u=cov_z[n:, n:], error=cov_e, xu_steps=xu)
 
 
 def per_state(cov: np.ndarray, names: Sequence[str], finite: bool) -> dict[str, float]:
-    """The square roots of ``cov``'s diagonal by state name (inf when not ``finite``)."""
+    """The square roots of ``cov``'s diagonal by state (or input) name (inf when not
+    ``finite``)."""
     d = np.sqrt(np.clip(np.diag(cov), 0.0, None)) if finite else np.full(len(names), np.inf)
     return {s: float(v) for s, v in zip(names, d, strict=True)}

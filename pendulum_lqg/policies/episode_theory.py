@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -21,6 +21,7 @@ from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.policies.closed_loop import (
     AugmentedLoop,
     LinearEstimator,
+    Readouts,
     StationaryProblem,
     augmented_loop,
     per_state,
@@ -49,6 +50,7 @@ class EpisodeTheory:
     rms : per state name, ``sqrt`` of the mean over the episode's physics steps (the state at the
         start of each step, periods ``skip … periods−1``) of ``E[x_i²]``
     u_rms : ``sqrt`` of the mean over those periods of ``E[u²]`` (the first input)
+    u_rms_by_input : the same per input name (several inputs; empty for one)
     estimate_error_rms : per state name, ``sqrt`` of the mean over those periods' samples of
         ``E[(x̂ − x)²]``
     cost_J : ``E[J]`` over the whole episode (every period: J has no burn-in)
@@ -63,11 +65,13 @@ class EpisodeTheory:
     periods: int
     skip: int
     burn_in: float
+    u_rms_by_input: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: ``rms.{state}, u_rms, estimate_error_rms.{state}, cost_J, periods, skip,
-        burn_in``."""
+        burn_in`` (and ``u_rms_by_input.{input}`` with several inputs)."""
         return {"rms": dict(self.rms), "u_rms": self.u_rms,
+                **({"u_rms_by_input": dict(self.u_rms_by_input)} if self.u_rms_by_input else {}),
                 "estimate_error_rms": dict(self.estimate_error_rms), "cost_J": self.cost_J,
                 "periods": self.periods, "skip": self.skip, "burn_in": self.burn_in}
 
@@ -127,35 +131,49 @@ def episode_theory(loop: AugmentedLoop, maps: list[np.ndarray], N: np.ndarray,
     period = prob.k * prob.h
     burn = skip * period
     if Sigma is None:
-        inf = float("inf")
+        inf, m = float("inf"), prob.Gamma.shape[1]
         return EpisodeTheory(rms=dict.fromkeys(state_names, inf), u_rms=inf,
                              estimate_error_rms=dict.fromkeys(state_names, inf), cost_J=inf,
-                             periods=periods, skip=skip, burn_in=burn)
+                             periods=periods, skip=skip, burn_in=burn,
+                             u_rms_by_input=dict.fromkeys(by_input(np.eye(m), prob), inf))
     m, P = start_moments(loop, prob.estimator, start)
-    sums: dict[int, list[Any]] = {0: [0.0] * 3, skip: [0.0] * 3}   # x, u, e summed from 0, skip
+    sums: dict[int, list[Any]] = {0: [0.0] * 4, skip: [0.0] * 4}   # x, u, e, xu from 0, skip
     sched = prob.estimator.schedule[:periods]       # the periods of a varying gain, one by one
     for a, est in enumerate(sched):
         la = augmented_loop(loop.Phi, loop.Gamma, prob.C, prob.K, est)
         r = readouts(la, maps, N, P + np.outer(m, m))
         for b in {0, skip} if a >= skip else {0}:
-            sums[b] = [s + v for s, v in zip(sums[b], (r.x_steps, r.u, r.error), strict=True)]
+            sums[b] = [s + v for s, v in zip(sums[b], _moments(r), strict=True)]
         m, P = la.A @ m, la.A @ P @ la.A.T + la.B @ N @ la.B.T
     rest, G = periods - len(sched), P - Sigma + np.outer(m, m)
     for b in {0, skip} if rest > 0 else ():          # then the steady loop, in closed form
         a = max(b - len(sched), 0)
         r = readouts(loop, maps, N, mean_second_moment(loop.A, Sigma, G, a, rest))
-        sums[b] = [s + v * (rest - a) for s, v in zip(sums[b], (r.x_steps, r.u, r.error),
-                                                      strict=True)]
+        sums[b] = [s + v * (rest - a) for s, v in zip(sums[b], _moments(r), strict=True)]
     whole, window = ([v / (periods - b) for v in sums[b]] for b in (0, skip))
-    cost = periods * period * float(np.trace(prob.Q @ whole[0]) + np.trace(prob.R @ whole[1]))
-    values = window
-    if not (all(np.all(np.isfinite(v)) for v in values) and math.isfinite(cost)):
+    cost = periods * period * prob.cost_rate(Readouts(z=whole[1], x_steps=whole[0], u=whole[1],
+                                                      error=whole[2], xu_steps=whole[3]))
+    if not (all(np.all(np.isfinite(v)) for v in window) and math.isfinite(cost)):
         raise ConfigError("x0: the episode's second moments overflow; the theory needs a "
                           "smaller initial state or noise")
     return EpisodeTheory(rms=per_state(window[0], state_names, True),
                          u_rms=float(np.sqrt(max(window[1][0, 0], 0.0))),
                          estimate_error_rms=per_state(window[2], state_names, True),
-                         cost_J=cost, periods=periods, skip=skip, burn_in=burn)
+                         cost_J=cost, periods=periods, skip=skip, burn_in=burn,
+                         u_rms_by_input=by_input(window[1], prob))
+
+
+def _moments(r: Readouts) -> tuple[np.ndarray, ...]:
+    """The second moments an episode sums over its periods: x over the physics steps, u, the
+    estimation error and ``x uᵀ`` over the physics steps (the cost's cross term)."""
+    return r.x_steps, r.u, r.error, r.xu_steps
+
+
+def by_input(cov_u: np.ndarray, prob: StationaryProblem) -> dict[str, float]:
+    """The RMS (or std) of each input by name from its second moment ``cov_u`` (m, m); empty for
+    one input, whose value is the summaries' ``u_rms`` / ``u_std`` alone."""
+    names = prob.input_names()
+    return per_state(cov_u, names, True) if len(names) > 1 else {}
 
 
 def episode_start(x0: Any, x0_std: Any, estimate0: str, policy: Any) -> EpisodeStart:

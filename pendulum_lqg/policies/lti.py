@@ -123,7 +123,8 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
                                  h=plant.control_period, C=plant.C, K=policy.K,
                                  estimator=linear_estimator(policy),
                                  Wd=plant.process_covariance() * s2, V=plant.V * s2,
-                                 Q=plant.Q, R=plant.R)
+                                 Q=plant.Q, R=plant.R, N=plant.cross_weight,
+                                 inputs=tuple(plant.input_names))
         out[name] = stationary(prob, name=name, duration=duration,
                                limits={"force_limit": plant.force_limit},
                                state_names=plant.state_names,

@@ -39,7 +39,13 @@ from pendulum_lqg.policies.closed_loop import (
     period_samples,
     readouts,
 )
-from pendulum_lqg.policies.episode_theory import EpisodeStart, EpisodeTheory, episode_start, episode_theory
+from pendulum_lqg.policies.episode_theory import (
+    EpisodeStart,
+    EpisodeTheory,
+    by_input,
+    episode_start,
+    episode_theory,
+)
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
@@ -57,8 +63,9 @@ class ClosedLoopTheory:
     eigenvalues : (n+q,) of the augmented loop; spectral_radius ; stable : radius < 1
     std, rms : per state name, the stationary std at the sampling instants and the RMS over the
         physics steps (inf when unstable)
-    u_std : std of the force [N]; estimate_error_std : per state name, of ``x̂ − x``
-    cost_rate : stationary ``E[xᵀQx + R u²]`` averaged over the period [1/s of J];
+    u_std : std of the force [N] (the first input); u_std_by_input : per input name with several
+        inputs (empty for one); estimate_error_std : per state name, of ``x̂ − x``
+    cost_rate : stationary ``E[xᵀQx + 2xᵀNu + uᵀRu]`` averaged over the period [1/s of J];
         cost_J : ``cost_rate · duration``, the J a stationary episode of the scenario's length
         implies (the simulation's J adds the start-up transient from x₀)
     covariance : Σ (n+q, n+q) of ``[x; ξ]`` at the sampling instants (nan when unstable)
@@ -86,6 +93,7 @@ class ClosedLoopTheory:
     state_names: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")
     units: tuple[str, ...] = ("m", "rad", "m/s", "rad/s")
     episode: EpisodeTheory | None = None
+    u_std_by_input: dict[str, float] = field(default_factory=dict)
 
     @property
     def verdict(self) -> str:
@@ -115,7 +123,9 @@ class ClosedLoopTheory:
 
         return {"plant": self.plant, "spectral_radius": self.spectral_radius,
                 "stable": self.stable, "std": dict(self.std), "rms": dict(self.rms),
-                "u_std": self.u_std, "estimate_error_std": dict(self.estimate_error_std),
+                "u_std": self.u_std,
+                **({"u_std_by_input": dict(self.u_std_by_input)} if self.u_std_by_input else {}),
+                "estimate_error_std": dict(self.estimate_error_std),
                 "cost_rate": self.cost_rate, "cost_J": self.cost_J, "duration": self.duration,
                 "limits": plain(self.limits, nonfinite_as_string=True), "verdict": self.verdict,
                 "notes": list(self.notes), "eigenvalues": plain(self.eigenvalues),
@@ -146,7 +156,7 @@ def stationary(prob: StationaryProblem, *, name: str, duration: float,
     else:
         Sigma = np.full(loop.A.shape, np.nan)
     r = readouts(loop, maps, N, Sigma)
-    cost_rate = float(np.trace(prob.Q @ r.x_steps) + np.trace(prob.R @ r.u))
+    cost_rate = prob.cost_rate(r)
     if stable and not (np.all(np.isfinite(Sigma)) and math.isfinite(cost_rate)):
         raise ConfigError("noise_scale: the stationary covariance overflows; the theory needs "
                           "a smaller noise scale or smaller noise covariances")
@@ -167,7 +177,9 @@ def stationary(prob: StationaryProblem, *, name: str, duration: float,
         cost_rate=cost_rate if stable else float("inf"),
         cost_J=cost_rate * duration if stable else float("inf"), duration=float(duration),
         covariance=Sigma, limits=dict(limits or {}), notes=notes,
-        state_names=tuple(state_names), units=tuple(units), episode=ep)
+        state_names=tuple(state_names), units=tuple(units), episode=ep,
+        u_std_by_input=(by_input(r.u, prob) if stable
+                        else dict.fromkeys(by_input(r.u, prob), float("inf"))))
 
 
 def policy_theory(plant: Plant, scenario: Scenario, policy: Any, *,

@@ -152,3 +152,54 @@ def test_episode_theory_agrees_with_the_linear_monte_carlo(name, burn_in):
     if name == "dlqr+kalman":
         mean, half = _ms_interval(rows, "rms_position")
         assert abs(mean - res.rms["position"] ** 2) > half
+
+
+def test_episode_cost_with_a_cross_term_is_python_controls_optimal_cost():
+    """Noise-free, full state, the gain of ``control.dlqr(Φ, Γ, Q, R, N)`` on the two-mass plant
+    with a cross term: the episode's E[J] over a long horizon is T·x₀ᵀ S x₀ (S python-control's
+    Riccati solution; the simulated cost is T Σ zᵀ [[Q, N], [Nᵀ, R]] z), to 1e-9."""
+    import control
+
+    from pendulum_lqg.model.lti import load_lti
+
+    plant = load_lti(LTI / "two_mass.toml")
+    N = np.array([[0.1, 0.0], [0.0, -0.1], [0.0, 0.0], [0.0, 0.0]])
+    K, S, _ = control.dlqr(plant.Phi, plant.Gamma, plant.Q, plant.R, N)
+    none = LinearEstimator(*(np.zeros((0, 0)),) * 5, full_state=True)
+    T, n = plant.control_period, plant.n_states
+    prob = StationaryProblem(kind="linear-zoh", Phi=plant.Phi, Gamma=plant.Gamma, k=1, h=T,
+                             C=plant.C, K=np.asarray(K), estimator=none, Wd=np.zeros((n, n)),
+                             V=np.zeros((2, 2)), Q=plant.Q, R=plant.R, N=N, inputs=("f1", "f2"))
+    x0 = np.array([0.2, -0.2, 0.1, 0.0])
+    start = EpisodeStart(x0=x0, x0_std=np.zeros(n), x_hat0=np.zeros(n))
+    ep = stationary(prob, name="dlqr", duration=400.0, state_names=plant.state_names,
+                    units=("",) * n, start=start).episode
+    assert ep.cost_J == pytest.approx(T * x0 @ S @ x0, rel=1e-9)
+    assert set(ep.u_rms_by_input) == {"f1", "f2"}
+
+
+def test_two_input_episode_theory_is_the_noise_free_simulation():
+    """The two-mass plant with a cross term under dlqr+none, no noise: the simulated cost and each
+    input's RMS are the episode theory's (the loop is deterministic), to 1e-10."""
+    import dataclasses
+
+    from pendulum_lqg.core.noise import NoiseModel
+    from pendulum_lqg.core.runner import run_episodes
+    from pendulum_lqg.model.lti import load_lti
+    from pendulum_lqg.policies.lti import design_lti_policy, lti_theory
+
+    plant = load_lti(LTI / "two_mass.toml")
+    N = np.array([[0.1, 0.0], [0.0, -0.1], [0.0, 0.0], [0.0, 0.0]])
+    plant = dataclasses.replace(plant, N=N)
+    sc = Scenario(control_period=plant.control_period, duration=2.0, plant="linear-zoh",
+                  noise=NoiseModel(scale=0.0))
+    row = run_episodes(plant, sc, design_lti_policy(plant, "dlqr+none"), seed=1,
+                       episodes=[0]).rows[0]
+    res = lti_theory(plant, ("dlqr+none",), noise_scale=0.0, duration=2.0)["dlqr+none"]
+    ep = res.episode
+    assert ep.cost_J == pytest.approx(row["cost"], rel=1e-10)
+    for u in ("f1", "f2"):
+        assert ep.u_rms_by_input[u] == pytest.approx(row[f"rms_{u}"], rel=1e-10)
+    for s in plant.state_names:
+        assert ep.rms[s] == pytest.approx(row[f"rms_{s}"], rel=1e-10)
+    assert set(res.u_std_by_input) == {"f1", "f2"}

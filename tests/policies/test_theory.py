@@ -229,3 +229,34 @@ def test_theory_of_an_overflowing_noise_refuses_in_one_line():
                              V=np.array([[0.0]]), Q=np.eye(1), R=np.eye(1))
     with pytest.raises(ConfigError, match=r"noise_scale: .*overflow"):
         stationary(prob, name="x", duration=1.0, state_names=("x",), units=("",))
+
+
+def test_cross_term_and_inputs_of_a_scalar_loop_in_closed_form():
+    """x⁺ = a x + b u + w, u = −k x (full state): E[x u] = −k Var x, so the cost rate with a
+    cross term n is (q − 2 n k + r k²) Var x; one input gives no per-input keys."""
+    a, b, k, W, q, n, r = 1.1, 1.0, 0.5, 0.3, 2.0, 0.4, 3.0
+    none = LinearEstimator(*(np.zeros((0, 0)),) * 5, full_state=True)
+    prob = StationaryProblem(kind="linear-zoh", Phi=np.array([[a]]), Gamma=np.array([[b]]), k=1,
+                             h=0.1, C=np.array([[1.0]]), K=np.array([[k]]), estimator=none,
+                             Wd=np.array([[W]]), V=np.array([[0.0]]), Q=np.array([[q]]),
+                             R=np.array([[r]]), N=np.array([[n]]))
+    res = stationary(prob, name="scalar", duration=5.0, state_names=("x",), units=("m",))
+    var = W / (1 - (a - b * k) ** 2)
+    assert res.cost_rate == pytest.approx((q - 2 * n * k + r * k * k) * var, rel=1e-12)
+    assert res.u_std_by_input == {} and "u_std_by_input" not in res.to_dict()
+
+
+def test_two_inputs_have_their_own_std():
+    """Two decoupled scalar loops side by side (inputs f1, f2): each input's std is its own loop's
+    k_j √(W_j / (1 − c_j²)), under the input's name; u_std stays the first's."""
+    a, b, k, W = np.array([1.1, 0.9]), np.array([1.0, 2.0]), np.array([0.5, 0.2]), np.array([0.3, 0.1])
+    none = LinearEstimator(*(np.zeros((0, 0)),) * 5, full_state=True)
+    prob = StationaryProblem(kind="linear-zoh", Phi=np.diag(a), Gamma=np.diag(b), k=1, h=0.1,
+                             C=np.eye(2), K=np.diag(k), estimator=none, Wd=np.diag(W),
+                             V=np.zeros((2, 2)), Q=np.eye(2), R=np.eye(2), inputs=("f1", "f2"))
+    res = stationary(prob, name="two", duration=5.0, state_names=("x1", "x2"), units=("", ""))
+    std = k * np.sqrt(W / (1 - (a - b * k) ** 2))
+    assert list(res.u_std_by_input) == ["f1", "f2"]
+    assert [res.u_std_by_input["f1"], res.u_std_by_input["f2"]] == pytest.approx(std, rel=1e-12)
+    assert res.u_std == res.u_std_by_input["f1"]
+    assert res.to_dict()["u_std_by_input"] == res.u_std_by_input
