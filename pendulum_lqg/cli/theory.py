@@ -105,7 +105,8 @@ def _print_table(results: dict[str, Any], header: str) -> None:
     shown = first.state_names[:2]                  # the first two states (one for a 1-state plant)
     unit = dict(zip(first.state_names, first.units, strict=True))
     t.add_column("policy", no_wrap=True)          # a policy's name is never cut
-    for col in ("radius", *(_head("std", s, unit[s]) for s in shown), "std u",
+    u = next(iter(first.u_std_by_input), "u")    # several inputs: the first one's column
+    for col in ("radius", *(_head("std", s, unit[s]) for s in shown), f"std {u}",
                 _head("std error of", shown[-1], unit[shown[-1]]), "J"):
         t.add_column(escape(col))
     for name, r in results.items():
@@ -132,7 +133,8 @@ def _print_episode_table(results: dict[str, Any], header: str, burn_in: float) -
     unit = dict(zip(first.state_names, first.units, strict=True))
     t = Table()
     t.add_column("policy", no_wrap=True)
-    for col in (*(_head("RMS", s, unit[s]) for s in shown), "RMS u",
+    u = next(iter(first.u_std_by_input), "u")
+    for col in (*(_head("RMS", s, unit[s]) for s in shown), f"RMS {u}",
                 _head("RMS error of", shown[-1], unit[shown[-1]]), "E[J]"):
         t.add_column(escape(col))
     for name, r in results.items():
