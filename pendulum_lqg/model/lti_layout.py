@@ -22,9 +22,9 @@ from pendulum_lqg.model.interface import Layout
 def lti_layout(plant: Any, scenario: Any) -> Layout:
     """An LTI plant's layout; refuses what its loop cannot run, one line naming the key."""
     n, m = plant.n_states, plant.n_inputs
-    if m > 1 and (scenario.actuator_delay or scenario.actuator_tau > 0):
-        raise ConfigError(f"actuator_delay: the actuator's delay line and lag take one input; "
-                          f"{plant.name!r} has {m}")
+    if m > 1 and scenario.actuator_tau > 0:
+        raise ConfigError(f"actuator_tau: the actuator's lag takes one input; {plant.name!r} "
+                          f"has {m}")
     if scenario.plant not in plant.simulators:
         raise ConfigError(f"plant: an LTI plant runs as its own exact sampled model "
                           f"(plant = 'linear-zoh'), got {scenario.plant!r}")
