@@ -114,6 +114,7 @@ class Simulator:
                                  covariances=lay.covariances)
         # The cost weights h·[diag(Q), R]: a period's cost is Σ weights·z² over its physics steps.
         self.weights = rules.cost_weights(lay.cost_Q, lay.cost_R, self.h, matrix=lay.cost_matrix)
+        self._period_cost = rules.period_cost_of(self.weights)     # step_one's, chosen once
         self._bounds = rules.failure_bounds(theta_max=scenario.theta_max, track_limit=self.track,
                                             u_max=self.u_limit, state_limits=lay.state_limits)
         self._force_noise = scenario.noise.process == "force" and self.noise.enabled
@@ -307,7 +308,10 @@ class Simulator:
         _, reason, fail_step = rules.detect_failure(v, reset, self._theta_max, self.track,
                                                     self._state_limits)
         if fail_step is None:                           # no row failed: the reason is FAIL_NONE
-            cost, code = rules.period_cost(v.z, self.weights).item(), rules.FAIL_NONE
+            # (read into a local: calling an instance's function attribute in place is a method
+            # look-up on the class first, every step)
+            period_cost = self._period_cost
+            cost, code = period_cost(v.z, self.weights).item(), rules.FAIL_NONE
         else:
             cost = float(rules.period_integrals(v.z, fail_step, h=self.h, weights=self.weights)[2][0])
             code = int(reason[0])

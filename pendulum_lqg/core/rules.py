@@ -37,11 +37,13 @@ steps, and at the end (after the state noise).
 from __future__ import annotations
 
 import functools
-from typing import TYPE_CHECKING, cast, overload
+from typing import TYPE_CHECKING, overload
 
 import numpy as np
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from pendulum_lqg.core.period import PeriodView
     from pendulum_lqg.core.scenario import Scenario
     from pendulum_lqg.model.interface import SimulatedPlant
@@ -83,9 +85,8 @@ def saturate(u: np.ndarray | float, u_max: float | np.ndarray) -> np.ndarray | f
     u_max)`` (the symmetric ``ctrlrange``). A float gives a float, an array a new array; the two
     give the same numbers (a min and a max are exact). For (n, m) inputs ``u_max`` may hold one
     limit per input (m,)."""
-    if isinstance(u, float):
-        um = cast(float, u_max)                  # a float force has one limit
-        return min(max(u, -um), um)
+    if isinstance(u, float):                     # a float force has one limit (the overloads)
+        return min(max(u, -u_max), u_max)
     return np.minimum(np.maximum(u, -u_max), u_max)
 
 
@@ -210,9 +211,22 @@ def period_cost(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
 
     One ``einsum`` (no temporaries the size of ``z``); a row's result does not depend on the other
     rows, so a batch and a single row give the same floats."""
-    if weights.ndim == 2:
-        return np.einsum("nki,ij,nkj->n", z, weights, z)
-    return np.einsum("nki,nki,i->n", z, z, weights)
+    return period_cost_of(weights)(z, weights)
+
+
+def period_cost_of(weights: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """The sum :func:`period_cost` computes for ``weights``, as a function of ``(z, weights)``:
+    the form (a vector of diagonal weights or a matrix) is the weights' own, so a caller that
+    steps many periods with the same weights (the single env) chooses it once, not per period."""
+    return _matrix_cost if weights.ndim == 2 else _diagonal_cost
+
+
+def _diagonal_cost(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    return np.einsum("nki,nki,i->n", z, z, weights)          # weights h·[diag(Q), R]
+
+
+def _matrix_cost(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    return np.einsum("nki,ij,nkj->n", z, weights, z)         # weights h·[[Q, N], [Nᵀ, R]]
 
 
 def period_integrals(z: np.ndarray, fail_step: np.ndarray | None, *, h: float,
