@@ -296,7 +296,7 @@ class Simulator:
         ``u`` [N] requested: :meth:`step` without the :class:`StepResult`. Returns the period's
         cost, the failure code (``FAIL_NONE`` while the episode runs) and the saturated force;
         ``x``, ``t`` and ``period`` advance as in :meth:`step` (in place)."""
-        if self.x.shape[0] != 1:
+        if len(self.x) != 1:                    # (len: .shape makes a tuple, every step)
             raise PendulumLQGError(f"step_one: needs a one-row simulator, this one has {self.n} rows")
         if self.metrics is not None or not math.isfinite(u):
             res = self.step(np.array([u]))
@@ -330,8 +330,7 @@ class Simulator:
         if self._physics is None or self._period is None:
             raise PendulumLQGError("simulator: closed (its physics threads were released by "
                                    "close()); make a new one")
-        n = requested.shape[0]
-        v = self._period.view(n)
+        v = self._period.view(len(requested))            # its rows (len: no .shape tuple)
         steps = None
         command = requested
         if not self.sensing.plain_actuation:
