@@ -181,7 +181,7 @@ def test_the_rules_of_a_period_are_defined_once_in_core_rules():
     the behaviour is what tests/core/test_loop.py and tests/envs/test_envs.py compare bit for bit
     across the batch, the single env and the vector env."""
     definitions = {"saturate", "nonfinite_forces", "failure_bounds", "all_inside", "detect_failure",
-                   "period_cost", "period_integrals", "end_of_period"}
+                   "period_cost", "period_cost_of", "period_integrals", "end_of_period"}
     where: dict[str, list[str]] = {}
     for p in PKG.rglob("*.py"):
         for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):

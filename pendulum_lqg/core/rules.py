@@ -15,7 +15,8 @@ non-finite force       :func:`nonfinite_forces` — a nan/inf request ends its e
 failure                :func:`failure_bounds` + :func:`all_inside` (the fast check) and
                        :func:`detect_failure` (the full rule: which rows, why, at which step)
 period cost            :func:`period_integrals` / :func:`period_cost` — the rectangle rule of
-                       ``∫ xᵀ diag(Q) x + R u² dt`` at the physics step
+                       ``∫ xᵀ diag(Q) x + R u² dt`` at the physics step (its form for given
+                       weights: :func:`period_cost_of`)
 state noise            :func:`end_of_period` — the jump ``x ← x + δx`` at the end of the period
 =====================  =======================================================================
 
