@@ -33,7 +33,7 @@ from typing import Literal
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.util.config import config_vector
+from pendulum_lqg.problem.declare import config_vector
 from pendulum_lqg.util.limits import MAX_NOISE_SCALE
 
 #: Control periods of noise drawn at once per episode.

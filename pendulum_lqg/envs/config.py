@@ -25,7 +25,7 @@ from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
 from pendulum_lqg.model.plant import ModelOverrides, Plant, load_plant
 from pendulum_lqg.names import OBSERVATION_MODES
-from pendulum_lqg.util.config import positive_number
+from pendulum_lqg.problem.declare import positive_number
 
 ObservationMode = Literal["measurement", "state"]
 

@@ -109,7 +109,7 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
         linear_estimator,
         stationary,
     )
-    from pendulum_lqg.util.config import positive_number
+    from pendulum_lqg.problem.declare import positive_number
 
     s = NoiseModel(scale=noise_scale).scale
     duration = positive_number("duration", duration)

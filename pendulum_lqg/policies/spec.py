@@ -11,7 +11,7 @@ from pendulum_lqg import design
 from pendulum_lqg.design.checks import as_poles
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS
-from pendulum_lqg.util.config import config_vector
+from pendulum_lqg.problem.declare import config_vector
 
 
 @dataclass(frozen=True)

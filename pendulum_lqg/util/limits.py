@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.util.config import positive_number
+from pendulum_lqg.problem.declare import positive_number
 
 #: ``run`` keeps every episode row in memory (and prints them with ``--json``); larger studies go
 #: through ``bench``, which streams them to disk unit by unit.

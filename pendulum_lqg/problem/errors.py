@@ -1,0 +1,66 @@
+"""The one adapter from msgspec's validation errors to the project's one-line error,
+``FILE: key.path: expected …, got …``.
+
+msgspec reports a failed conversion as ``Expected `float` > 0.0 - at `$.scenario.duration```; the
+adapter keeps the path (as dotted keys), words the expectation from the declared type
+(:func:`~pendulum_lqg.problem.declare.expected`) and shows the value found there.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any, TypeVar, get_type_hints
+
+import msgspec
+
+from pendulum_lqg.errors import ConfigError
+
+T = TypeVar("T")
+
+_AT = re.compile(r" - at `\$(?P<path>[^`]*)`$")
+_UNKNOWN = re.compile(r"Object contains unknown field `(?P<key>[^`]*)`")
+_MISSING = re.compile(r"Object missing required field `(?P<key>[^`]*)`")
+
+
+def short(value: object) -> str:
+    """``repr(value)`` on one line, at most 60 characters (a damaged file may hold anything)."""
+    if isinstance(value, dict | list) and len(value) > 3:
+        return f"{type(value).__name__} of {len(value)} items"
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def convert(data: Any, struct: type[T], *, where: str = "") -> T:
+    """``data`` (a mapping) as the declaration ``struct``; a value that does not fit is one
+    :class:`ConfigError` line naming ``where`` (a file, or a table) and the key path."""
+    try:
+        return msgspec.convert(data, struct)
+    except msgspec.ValidationError as exc:
+        raise config_error(exc, data, struct, where) from None
+
+
+def config_error(exc: msgspec.ValidationError, data: Any, struct: type,
+                 where: str = "") -> ConfigError:
+    """The project's one line for msgspec's ``exc`` raised converting ``data`` to ``struct``."""
+    from pendulum_lqg.problem.declare import expected
+
+    message = str(exc)
+    prefix = f"{where}: " if where else ""
+    if m := _UNKNOWN.match(message):
+        known = ", ".join(getattr(struct, "__struct_fields__", ()))
+        return ConfigError(f"{prefix}{m['key']}: unknown key; known keys: {known}")
+    if m := _MISSING.match(message):
+        return ConfigError(f"{prefix}{m['key']}: missing")
+    at = _AT.search(message)
+    keys = re.findall(r"\.(\w+)|\[(\d+)\]", at["path"]) if at else []
+    path = [k or int(i) for k, i in keys]
+    value, kind = data, struct
+    for step in path:                     # the value found there, and the declared type
+        try:
+            value = value[step]
+        except (KeyError, IndexError, TypeError):
+            break
+        if isinstance(step, str) and hasattr(kind, "__struct_fields__"):
+            kind = get_type_hints(kind, include_extras=True).get(step, Any)
+    label = ".".join(str(k) for k in path if isinstance(k, str)) or "value"
+    return ConfigError(f"{prefix}{label}: expected {expected(kind)}, got {short(value)}")
