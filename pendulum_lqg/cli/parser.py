@@ -10,6 +10,7 @@ import sys
 from collections.abc import Callable
 from typing import Any, NoReturn
 
+from pendulum_lqg.cli.options import add_flags
 from pendulum_lqg.cli.score import add_call_timeout
 from pendulum_lqg.cli.score import add_parsers as add_score_parsers
 from pendulum_lqg.cli.train import add_train_parser
@@ -91,22 +92,6 @@ def _number(text: str) -> float:
     return v
 
 
-def _nonneg_number(text: str) -> float:
-    """argparse type: a finite number ≥ 0."""
-    v = _number(text)
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, got {text!r}")
-    return v
-
-
-def _positive_number(text: str) -> float:
-    """argparse type: a finite number > 0."""
-    v = _number(text)
-    if v <= 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return v
-
-
 def _add_design_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("design")
     g.add_argument("--model", default=None, metavar="XML",
@@ -134,30 +119,6 @@ def _add_design_options(p: argparse.ArgumentParser) -> None:
                         "forces on slider and hinge (default state)")
 
 
-def _limit(text: str) -> float:
-    """argparse type: a positive number of the limit's unit, or ``inf`` (no limit)."""
-    try:
-        v = float(text)
-    except ValueError:
-        v = -1.0
-    if not v > 0:                                    # also refuses nan
-        raise argparse.ArgumentTypeError(f"expected a positive number or inf, got {text!r}")
-    return v
-
-
-def add_limit_options(p: argparse.ArgumentParser) -> None:
-    """``--theta-max``, ``--track-limit``, ``--force-limit`` (``inf`` switches one off)."""
-    g = p.add_argument_group("limits (inf switches a limit off; core/rules.py applies them)")
-    g.add_argument("--theta-max", type=_limit, default=defaults.THETA_MAX, metavar="RAD",
-                   help=f"failure when |θ| exceeds this, in rad (default {defaults.THETA_MAX:g})")
-    g.add_argument("--track-limit", type=_limit, default=None, metavar="M",
-                   help="failure when |p| reaches this, in m (default: the MJCF slider range, "
-                        "±2.4 m; beyond it only on a linear plant)")
-    g.add_argument("--force-limit", type=_limit, default=None, metavar="N",
-                   help="saturation |u| ≤ this, in N (default: the MJCF ctrlrange, ±10 N; "
-                        "beyond it only on a linear plant)")
-
-
 def add_theory_parser(sub: Any) -> None:
     """The ``theory`` subcommand."""
     p = sub.add_parser(
@@ -179,31 +140,15 @@ def add_theory_parser(sub: Any) -> None:
                         "experiments/lti/double_integrator.toml) instead of the cart-pole; "
                         "policies dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
                         "dlqr+none, dlqr+kalman, dlqr+luenberger)")
-    p.add_argument("--noise-scale", type=_nonneg_number, default=1.0,
-                   help="multiplies both noises' standard deviations, at most 10¹² (default 1)")
-    p.add_argument("--duration", type=_positive_number, default=defaults.DURATION,
-                   help=f"episode length in s for the implied J and the episode's expected RMS "
-                        f"(default {defaults.DURATION:g})")
+    add_flags(p, "theory")              # the declared settings (problem/), theory's front end
     p.add_argument("--theta0", type=_number, default=defaults.X0[1],
                    help=f"initial pole angle in rad of the episode the expected RMS is taken over "
                         f"(default {defaults.X0[1]:g}, as run; not with --lti: the file's x0)")
-    p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
-                   help="initial estimate of that episode: x̂₀ = 0 or the true x₀ (default zero)")
-    add_burn_in_option(p)
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: policies.NAME.{spectral_radius, stable, std, "
                         "u_std, estimate_error_std, cost_rate, episode.{rms, u_rms, "
                         "estimate_error_rms, cost_J}, …}")
-    add_limit_options(p)
     _add_design_options(p)
-
-
-def add_burn_in_option(p: argparse.ArgumentParser) -> None:
-    """``--burn-in SECONDS``: the start of each episode left out of the RMS metrics."""
-    p.add_argument("--burn-in", type=_nonneg_number, default=0.0, metavar="SECONDS",
-                   help="leave the first SECONDS of each episode (whole control periods) out of "
-                        "the RMS metrics and of the theory's expected RMS; J, maxima and "
-                        "settling time keep the whole episode (default 0)")
 
 
 def _add_design_parser(sub: Any) -> None:
@@ -241,17 +186,9 @@ def _add_run_parser(sub: Any) -> None:
                    help="number of episodes (default 100)")
     p.add_argument("--seed", type=_nonneg_int, default=0,
                    help="the run's seed; episode k draws from episode_seed(seed, k) (default 0)")
-    p.add_argument("--duration", type=_number, default=defaults.DURATION,
-                   help=f"episode length in s, at most 10⁸ control periods (default "
-                        f"{defaults.DURATION:g})")
-    p.add_argument("--noise-scale", type=_number, default=1.0,
-                   help="multiplies both noises' standard deviations (0 = noise-free; default 1); "
-                        "the estimators stay designed for the nominal noise")
+    add_flags(p, "run")                 # the declared settings (problem/), run's front end
     p.add_argument("--theta0", type=_number, default=defaults.X0[1],
                    help=f"initial pole angle in rad, e.g. --theta0 -0.1 (default {defaults.X0[1]:g})")
-    p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
-                   help="initial estimate: x̂₀ = 0 or the true x₀ (default zero)")
-    add_burn_in_option(p)
     p.add_argument("--plant", choices=PLANTS, default="mujoco",
                    help="the simulated plant: MuJoCo, or the model's linearisation discretised "
                         "exactly (linear-zoh) or by the lecture's forward Euler at the control "
@@ -278,23 +215,12 @@ def _add_run_parser(sub: Any) -> None:
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: configuration, summary and every episode row")
     add_call_timeout(p)
-    add_limit_options(p)
     _add_design_options(p)
 
 
 def _add_sensing_options(p: argparse.ArgumentParser) -> None:
-    """``run``'s sensing and actuation: delays, sample losses, actuator lag, randomised plants."""
-    g = p.add_argument_group("sensing and actuation")
-    g.add_argument("--measurement-delay", type=_number, default=0.0, metavar="S",
-                   help="age of the measurement the policy receives, in s (a whole number of "
-                        "control periods; default 0)")
-    g.add_argument("--actuator-delay", type=_number, default=0.0, metavar="S",
-                   help="delay of the force, in s (a whole number of control periods; default 0)")
-    g.add_argument("--dropout", type=_number, default=0.0, metavar="P",
-                   help="probability that a measurement sample is lost (the policy gets nan; "
-                        "default 0)")
-    g.add_argument("--actuator-tau", type=_number, default=0.0, metavar="S",
-                   help="time constant of a first-order lag of the force, in s (default 0: none)")
+    """``run``'s randomised plants (the delays, sample losses and lag are declared flags)."""
+    g = p.add_argument_group("randomised plants")
     g.add_argument("--randomize", action="append", default=None, metavar="KEY=LO:HI",
                    help="per-episode uniform scale of a parameter of the simulated plant, e.g. "
                         "pole_mass_scale=0.8:1.2 (repeatable; keys pole_mass_scale, "

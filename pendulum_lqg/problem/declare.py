@@ -98,6 +98,23 @@ def _split(kind: Any) -> tuple[Any, msgspec.Meta]:
     return kind, msgspec.Meta()
 
 
+def strip(kind: Any) -> Any:
+    """``kind`` without its ``Annotated`` constraints (``Positive`` → ``float``), at every level."""
+    while get_origin(kind) is Annotated:
+        kind = get_args(kind)[0]
+    args = get_args(kind)
+    if args and get_origin(kind) is not Literal:
+        inner = tuple(strip(a) for a in args)
+        origin = get_origin(kind)
+        if origin in (tuple, dict, list):
+            return origin[inner]
+        from functools import reduce
+        from operator import or_
+
+        return reduce(or_, inner)
+    return kind
+
+
 def _constraints(kind: Any) -> tuple[Any, dict[str, Any]]:
     """The base type of ``kind`` and its merged Meta constraints."""
     bounds: dict[str, Any] = {}
