@@ -40,6 +40,11 @@ NonNegativeInt = Annotated[int, msgspec.Meta(ge=0)]
 FRONTS = ("env", "file", "run", "theory")
 
 
+#: Four numbers (a state vector [p, θ, ṗ, θ̇], its weights), and four numbers ≥ 0.
+Vector4 = Annotated[tuple[Finite, ...], msgspec.Meta(min_length=4, max_length=4)]
+NonNegative4 = Annotated[tuple[NonNegative, ...], msgspec.Meta(min_length=4, max_length=4)]
+
+
 def vector(n: int, item: Any = Finite) -> Any:
     """The type of ``n`` numbers of type ``item`` (a tuple)."""
     return Annotated[tuple[item, ...], msgspec.Meta(min_length=n, max_length=n)]
@@ -143,8 +148,8 @@ def expected(kind: Any) -> str:
         item = expected(args[0])
         return f"{n} {_plural(item)}" if n is not None else f"a list of {_plural(item)}"
     if base is int:
-        return {0: "a non-negative integer", 1: "a positive integer"}.get(b.get("ge", None),
-                                                                          "an integer")
+        names = {0: "a non-negative integer", 1: "a positive integer"}
+        return names.get(b["ge"], f"an integer ≥ {b['ge']}") if "ge" in b else "an integer"
     if base is float:
         finite = b.get("le") == BIG
         if "gt" in b and b["gt"] == 0:

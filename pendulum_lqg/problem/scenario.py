@@ -20,10 +20,11 @@ from pendulum_lqg.problem import defaults
 from pendulum_lqg.problem.declare import (
     Limit,
     NonNegative,
+    NonNegative4,
     Positive,
     Probability,
+    Vector4,
     setting,
-    vector,
 )
 
 Plant = Literal["mujoco", "linear-zoh", "linear-euler"]
@@ -42,9 +43,9 @@ class ScenarioSettings(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown
     duration: Annotated[Positive, setting(
         "episode length (rounded to whole control periods)", unit="s", metavar="S",
         fronts=("env", "file", "run", "theory"), grid=True)] = defaults.DURATION
-    x0: Annotated[vector(4), setting(
+    x0: Annotated[Vector4, setting(
         "mean initial state [p, θ, ṗ, θ̇]", unit=_STATE, fronts=("env", "file"))] = defaults.X0
-    x0_std: Annotated[vector(4, NonNegative), setting(
+    x0_std: Annotated[NonNegative4, setting(
         "standard deviation of the initial state around x0 (drawn per episode)", unit=_STATE,
         fronts=("env", "file"))] = defaults.X0_STD
     estimate0: Annotated[Estimate0, setting(
@@ -64,7 +65,7 @@ class ScenarioSettings(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown
     settle_band: Annotated[Positive, setting(
         "settling time is the last time |θ| was above this band", unit="rad",
         fronts=("file",))] = defaults.SETTLE_BAND
-    cost_Q: Annotated[vector(4, NonNegative), setting(
+    cost_Q: Annotated[NonNegative4, setting(
         "state weights of J = ∫ xᵀ diag(Q) x + R u² dt", fronts=("env", "file"))] = defaults.COST_Q
     cost_R: Annotated[Positive, setting(
         "input weight R of J", unit="N⁻²", fronts=("env", "file"))] = defaults.COST_R
