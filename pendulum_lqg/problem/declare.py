@@ -69,6 +69,7 @@ class Declared:
     unit: str
     metavar: str | None
     fronts: tuple[str, ...]
+    grid: bool = False       # also a key of the experiment file's [grid] (routed to its table)
 
     @property
     def flag(self) -> str:
@@ -83,7 +84,8 @@ def declared(struct: type[msgspec.Struct]) -> list[Declared]:
         kind, info = _split(hints[name])
         out.append(Declared(name, kind, default, info.description or "",
                             (info.extra or {}).get("unit", ""), (info.extra or {}).get("metavar"),
-                            (info.extra or {}).get("fronts", FRONTS)))
+                            (info.extra or {}).get("fronts", FRONTS),
+                            (info.extra or {}).get("grid", False)))
     return out
 
 
