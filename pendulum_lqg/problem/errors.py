@@ -1,5 +1,5 @@
 """The one adapter from msgspec's validation errors to the project's one-line error,
-``FILE: key.path: expected …, got …``.
+``FILE: key.path: expected …, got …``, and :class:`Where`, the file and key such a line names.
 
 msgspec reports a failed conversion as ``Expected `float` > 0.0 - at `$.scenario.duration```; the
 adapter keeps the path (as dotted keys), words the expectation from the declared type
@@ -9,6 +9,8 @@ adapter keeps the path (as dotted keys), words the expectation from the declared
 from __future__ import annotations
 
 import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any, TypeVar, get_type_hints
 
 import msgspec
@@ -20,6 +22,52 @@ T = TypeVar("T")
 _AT = re.compile(r" - at `\$(?P<path>[^`]*)`$")
 _UNKNOWN = re.compile(r"Object contains unknown field `(?P<key>[^`]*)`")
 _MISSING = re.compile(r"Object missing required field `(?P<key>[^`]*)`")
+
+
+Validator = Callable[[Any], Any]
+_ABSENT: Any = object()
+
+
+class Invalid(Exception):
+    """A value is not what a validator expects (``expected``: e.g. ``"a positive integer"``)."""
+
+    def __init__(self, expected: str) -> None:
+        super().__init__(expected)
+        self.expected = expected
+
+
+@dataclass(frozen=True)
+class Where:
+    """A place in a file: ``file`` (as the error shows it) and the keys leading there."""
+
+    file: str
+    keys: tuple[str, ...] = ()
+
+    def at(self, key: str) -> Where:
+        return Where(self.file, (*self.keys, key))
+
+    def label(self, key: str | None = None) -> str:
+        keys = self.keys if key is None else (*self.keys, key)
+        return f"{self.file}: {'.'.join(keys)}" if keys else self.file
+
+    def error(self, message: str, key: str | None = None) -> ConfigError:
+        return ConfigError(f"{self.label(key)}: {message}")
+
+    def get(self, data: Mapping[str, Any], key: str, check: Validator, *,
+            default: Any = _ABSENT) -> Any:
+        """``data[key]`` passed through ``check``; missing (without ``default``) or invalid is one
+        :class:`ConfigError` line naming the file and the key."""
+        if key not in data:
+            if default is _ABSENT:
+                raise self.error("missing", key)
+            return default
+        return self.check(data[key], check, key)
+
+    def check(self, value: Any, check: Validator, key: str | None = None) -> Any:
+        try:
+            return check(value)
+        except Invalid as exc:
+            raise self.error(f"expected {exc.expected}, got {short(value)}", key) from None
 
 
 def short(value: object) -> str:
