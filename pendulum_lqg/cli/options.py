@@ -43,3 +43,21 @@ def add_flags(p: argparse.ArgumentParser | Any, command: str, names: tuple[str, 
                            help=text)
         else:
             p.add_argument(flag, choices=choices, default=default, help=text)
+
+
+class Kind:
+    """argparse ``type=`` of a constrained type of :mod:`pendulum_lqg.problem.declare` named
+    ``kind`` (``"PositiveInt"``, ``"Finite"``, …; ``"Complex"``: a pole), or with ``each`` a
+    comma-separated list of them — checked by the declarations' one path when given."""
+
+    def __init__(self, kind: str, *, each: bool = False) -> None:
+        self.kind, self.each = kind, each
+        self.__name__ = kind
+
+    def __call__(self, text: str) -> Any:
+        from pendulum_lqg.problem.frontends import text_value
+
+        try:
+            return text_value(self.kind, text, each=self.each)
+        except ConfigError as exc:
+            raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[1]) from None

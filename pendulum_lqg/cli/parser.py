@@ -4,13 +4,11 @@ checks (exit 2), and the arguments turned into library objects."""
 from __future__ import annotations
 
 import argparse
-import math
 import re
 import sys
-from collections.abc import Callable
 from typing import Any, NoReturn
 
-from pendulum_lqg.cli.options import add_flags
+from pendulum_lqg.cli.options import Kind, add_flags
 from pendulum_lqg.cli.score import add_call_timeout
 from pendulum_lqg.cli.score import add_parsers as add_score_parsers
 from pendulum_lqg.cli.train import add_train_parser
@@ -44,74 +42,26 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
-def _floats(text: str) -> list[float]:
-    try:
-        vals = [float(t) for t in text.replace(" ", "").split(",") if t]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
-    if not vals or not all(math.isfinite(v) for v in vals):
-        raise argparse.ArgumentTypeError(f"expected finite comma-separated numbers, got {text!r}")
-    return vals
-
-
-def _complexes(text: str) -> list[complex]:
-    try:
-        vals = [complex(t.replace("i", "j")) for t in text.replace(" ", "").split(",") if t]
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected comma-separated poles like -0.4,-0.5 or -1+2j,-1-2j, got {text!r}") from None
-    return vals
-
-
-def _int_at_least(minimum: int) -> Callable[[str], int]:
-    """argparse type: an integer ≥ ``minimum``."""
-    what = "a positive integer" if minimum == 1 else "a non-negative integer"
-
-    def parse(text: str) -> int:
-        try:
-            v = int(text)
-        except ValueError:
-            v = minimum - 1
-        if v < minimum:
-            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
-        return v
-
-    return parse
-
-
-_positive_int, _nonneg_int = _int_at_least(1), _int_at_least(0)
-
-
-def _number(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
-    return v
-
-
 def _add_design_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("design")
     g.add_argument("--model", default=None, metavar="XML",
                    help="MJCF model file (default: the bundled models/cartpole.xml)")
-    g.add_argument("--dt", type=_number, default=defaults.CONTROL_PERIOD, metavar="T",
+    g.add_argument("--dt", type=Kind("Finite"), default=defaults.CONTROL_PERIOD, metavar="T",
                    help="control period T in seconds, a whole number (≤ 10 000) of the model's "
                         f"physics steps and at most 1 s (default {defaults.CONTROL_PERIOD:g})")
-    g.add_argument("--q", type=_floats, default=None, metavar="Q1,..,Q4",
+    g.add_argument("--q", type=Kind("Finite", each=True), default=None, metavar="Q1,..,Q4",
                    help="diagonal of the LQR state weight Q, units of [m⁻², rad⁻², (m/s)⁻², "
                         "(rad/s)⁻²] (default 1,1,1,1)")
-    g.add_argument("--r", type=_number, default=None, help="LQR input weight R in N⁻² (default 1)")
-    g.add_argument("--observer-poles", type=_complexes, default=None, metavar="P1,..,P4",
+    g.add_argument("--r", type=Kind("Finite"), default=None, help="LQR input weight R in N⁻² (default 1)")
+    g.add_argument("--observer-poles", type=Kind("Complex", each=True), default=None, metavar="P1,..,P4",
                    help="continuous-time Luenberger poles in rad/s, e.g. --observer-poles "
                         "-2,-3,-4,-5 or -1+2j,-1-2j,-3,-4 (default -0.4,-0.5,-0.6,-0.7); "
                         "discrete designs use z = exp(s·T)")
-    g.add_argument("--w", type=_floats, default=None, metavar="W",
+    g.add_argument("--w", type=Kind("Finite", each=True), default=None, metavar="W",
                    help="process-noise spectral density, diagonal: 4 values (m²·s, rad²·s, …) "
                         "for state noise, 2 (N²·s, N²m²·s) for force noise (default the "
                         "lecture's 4e-4 on every state)")
-    g.add_argument("--v", type=_floats, default=None, metavar="V",
+    g.add_argument("--v", type=Kind("Finite", each=True), default=None, metavar="V",
                    help="measurement-noise covariance per sample, diagonal (m², rad²; default "
                         "0.01,0.01)")
     g.add_argument("--process-noise", choices=("state", "force"), default="state",
@@ -141,7 +91,7 @@ def add_theory_parser(sub: Any) -> None:
                         "policies dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
                         "dlqr+none, dlqr+kalman, dlqr+luenberger)")
     add_flags(p, "theory")              # the declared settings (problem/), theory's front end
-    p.add_argument("--theta0", type=_number, default=defaults.X0[1],
+    p.add_argument("--theta0", type=Kind("Finite"), default=defaults.X0[1],
                    help=f"initial pole angle in rad of the episode the expected RMS is taken over "
                         f"(default {defaults.X0[1]:g}, as run; not with --lti: the file's x0)")
     p.add_argument("--json", action="store_true",
@@ -182,12 +132,12 @@ def _add_run_parser(sub: Any) -> None:
                    help="built-in controller (default dlqr); not with --policy")
     p.add_argument("--observer", choices=OBSERVERS, default=None,
                    help="built-in observer (default kalman); not with --policy")
-    p.add_argument("--episodes", type=_positive_int, default=100,
+    p.add_argument("--episodes", type=Kind("PositiveInt"), default=100,
                    help="number of episodes (default 100)")
-    p.add_argument("--seed", type=_nonneg_int, default=0,
+    p.add_argument("--seed", type=Kind("NonNegativeInt"), default=0,
                    help="the run's seed; episode k draws from episode_seed(seed, k) (default 0)")
     add_flags(p, "run")                 # the declared settings (problem/), run's front end
-    p.add_argument("--theta0", type=_number, default=defaults.X0[1],
+    p.add_argument("--theta0", type=Kind("Finite"), default=defaults.X0[1],
                    help=f"initial pole angle in rad, e.g. --theta0 -0.1 (default {defaults.X0[1]:g})")
     p.add_argument("--plant", choices=PLANTS, default="mujoco",
                    help="the simulated plant: MuJoCo, or the model's linearisation discretised "
@@ -203,7 +153,7 @@ def _add_run_parser(sub: Any) -> None:
     p.add_argument("--backend", choices=("rollout", "step"), default="rollout",
                    help="batched MuJoCo (mujoco.batch) or a plain mj_step loop; bit-identical results "
                         "(default rollout)")
-    p.add_argument("--nthread", type=_nonneg_int, default=None,
+    p.add_argument("--nthread", type=Kind("NonNegativeInt"), default=None,
                    help="physics threads (default: the CPU cores available, at most 8)")
     p.add_argument("--record", metavar="FILE.rrd", default=None,
                    help="write a Rerun recording of every episode to FILE.rrd (default: none)")
@@ -234,7 +184,7 @@ def _add_plot_options(p: argparse.ArgumentParser) -> None:
                    help="draw one episode to FILE (.png, .svg or .pdf): p, θ, ṗ, θ̇ with the "
                         "estimate ± 2σ, the measurement y and the force u with its saturation "
                         "(default: none)")
-    g.add_argument("--plot-episode", type=_nonneg_int, default=0, metavar="K",
+    g.add_argument("--plot-episode", type=Kind("NonNegativeInt"), default=0, metavar="K",
                    help="the episode --plot draws, 0 … --episodes − 1 (default 0, the first)")
 
 
@@ -247,9 +197,9 @@ def _add_bench_parser(sub: Any) -> None:
     p.add_argument("experiment",
                    help="a shipped experiment (lecture, noise, plugins, …), NAME.toml in the "
                         "current folder, or a path to a TOML file")
-    p.add_argument("--episodes", type=_positive_int, default=None,
+    p.add_argument("--episodes", type=Kind("PositiveInt"), default=None,
                    help="episodes per configuration (default: the file's)")
-    p.add_argument("--seed", type=_nonneg_int, default=None, help="seed (default: the file's)")
+    p.add_argument("--seed", type=Kind("NonNegativeInt"), default=None, help="seed (default: the file's)")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="results folder (default results/<name> under the current folder)")
     p.add_argument("--model", default=None, metavar="XML",
@@ -270,7 +220,7 @@ def _add_bench_parser(sub: Any) -> None:
     p.add_argument("--record", metavar="DIR", default=None,
                    help="also record the worst/median/best/first-failing episode of each "
                         "configuration into DIR (default: none)")
-    p.add_argument("--nthread", type=_nonneg_int, default=None,
+    p.add_argument("--nthread", type=Kind("NonNegativeInt"), default=None,
                    help="physics threads (default: the CPU cores available, at most 8)")
     p.add_argument("--executor", choices=("local", "ray"), default="local",
                    help="where work units run: this process (default) or Ray tasks (needs the "
@@ -302,13 +252,13 @@ def _add_perf_parser(sub: Any) -> None:
                                    "MuJoCo physics of the same batch (open-loop mujoco.rollout "
                                    "and mujoco.batch calls, the faster as the baseline), "
                                    "alternating, and optionally the peak memory of long benches.")
-    p.add_argument("--episodes", type=_positive_int, default=1024,
+    p.add_argument("--episodes", type=Kind("PositiveInt"), default=1024,
                    help="episodes in the batch (default 1024)")
-    p.add_argument("--duration", type=_number, default=2.0,
+    p.add_argument("--duration", type=Kind("Finite"), default=2.0,
                    help="seconds simulated per episode (default 2)")
-    p.add_argument("--nthread", type=_nonneg_int, default=None,
+    p.add_argument("--nthread", type=Kind("NonNegativeInt"), default=None,
                    help="physics threads (default: the CPU cores available, at most 8)")
-    p.add_argument("--repeats", type=_positive_int, default=5,
+    p.add_argument("--repeats", type=Kind("PositiveInt"), default=5,
                    help="raw / closed-loop pairs, alternating; medians are compared (default 5)")
     p.add_argument("--memory", action="store_true",
                    help="also measure peak memory of 1000-episode benches of 2 s and 10 s")
@@ -329,7 +279,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_bench_parser(sub)
     _add_report_parser(sub)
     _add_perf_parser(sub)
-    add_score_parsers(sub, _positive_int)
+    add_score_parsers(sub)
     add_theory_parser(sub)
     add_train_parser(sub)
     return parser

@@ -10,7 +10,7 @@ without importing msgspec; this module is imported only when a declared flag is 
 from __future__ import annotations
 
 from functools import cache
-from typing import Any
+from typing import Annotated, Any
 
 import msgspec
 
@@ -33,3 +33,25 @@ def flag_value(name: str, text: str) -> Any:
         return msgspec.convert(text.strip(), d.type, strict=False)
     except msgspec.ValidationError:
         raise ConfigError(f"{d.flag}: expected {expected(d.type)}, got {text!r}") from None
+
+
+def text_value(kind: str, text: str, *, each: bool = False) -> Any:
+    """``text`` read as the constrained type named ``kind`` of :mod:`~pendulum_lqg.problem.declare`
+    (``each``: a comma-separated list of them); ``"Complex"`` is a pole such as ``-1+2j``."""
+    from pendulum_lqg.problem import declare
+
+    items = [t for t in text.replace(" ", "").split(",") if t] if each else text.strip()
+    if kind == "Complex":
+        try:
+            return [complex(t.replace("i", "j")) for t in items]
+        except ValueError:
+            raise ConfigError(f"value: expected comma-separated poles like -0.4,-0.5 or "
+                              f"-1+2j,-1-2j, got {text!r}") from None
+    base: Any = getattr(declare, kind)
+    target: Any = Annotated[list[base], msgspec.Meta(min_length=1)] if each else base
+    try:
+        return msgspec.convert(items, target, strict=False)
+    except msgspec.ValidationError:
+        what = f"comma-separated {declare.expected(declare.vector(2, base))[2:]}" if each \
+            else expected(base)
+        raise ConfigError(f"value: expected {what}, got {text!r}") from None

@@ -281,7 +281,7 @@ def test_negative_numbers_and_lists_are_taken_in_their_natural_form(capsys):
     with pytest.raises(SystemExit) as exit_:                          # still a clean error
         main(["run", "--theta0", "-", "--episodes", "1"])
     assert exit_.value.code == 2
-    assert "error: argument --theta0: expected a number" in capsys.readouterr().err
+    assert "error: argument --theta0: expected a finite number" in capsys.readouterr().err
 
 
 def test_every_subcommand_and_option_has_help():
