@@ -294,7 +294,7 @@ def jsonable(obj: Any) -> Any:
     return plain(obj)
 
 
-def noise_from_args(args: argparse.Namespace, scale: float = 1.0) -> Any:
+def noise_from_args(args: argparse.Namespace, scale: float = defaults.NOISE_SCALE) -> Any:
     from pendulum_lqg.core.noise import NoiseModel
 
     kw: dict[str, Any] = {"process": args.process_noise, "scale": scale}
