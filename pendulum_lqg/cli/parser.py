@@ -8,12 +8,11 @@ import re
 import sys
 from typing import Any, NoReturn
 
-from pendulum_lqg.cli.options import Kind, add_flags
 from pendulum_lqg.cli.score import add_call_timeout
 from pendulum_lqg.cli.score import add_parsers as add_score_parsers
 from pendulum_lqg.cli.train import add_train_parser
-from pendulum_lqg.core import defaults
 from pendulum_lqg.names import CONTROLLERS, LECTURE_POLICIES, OBSERVERS, PLANTS
+from pendulum_lqg.problem import defaults
 from pendulum_lqg.version import __version__
 
 EXIT_USAGE = 2
@@ -40,6 +39,21 @@ class _Parser(argparse.ArgumentParser):
         self.print_usage(sys.stderr)
         print(f"error: {message}", file=sys.stderr)
         raise SystemExit(EXIT_USAGE)
+
+
+def Kind(kind: str, *, each: bool = False) -> Any:
+    """:class:`pendulum_lqg.cli.options.Kind`, imported when a parser is built (``import
+    pendulum_lqg.cli`` loads neither the flags nor their checks)."""
+    from pendulum_lqg.cli.options import Kind as DeclaredKind
+
+    return DeclaredKind(kind, each=each)
+
+
+def add_flags(p: argparse.ArgumentParser, command: str) -> None:
+    """The declared flags of ``command`` (:func:`pendulum_lqg.cli.options.add_flags`)."""
+    from pendulum_lqg.cli.options import add_flags as add_declared
+
+    add_declared(p, command)
 
 
 def _add_design_options(p: argparse.ArgumentParser) -> None:

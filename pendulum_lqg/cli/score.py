@@ -8,11 +8,11 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from pendulum_lqg.cli.options import Kind
-
 
 def add_parsers(sub: Any) -> None:
     """The ``score`` and ``board`` subcommands (``sub``: the command's subparsers)."""
+    from pendulum_lqg.cli.options import Kind
+
     p = sub.add_parser(
         "score", help="score a policy or a Gymnasium agent on the suites (success, J, gap to LQG)",
         description="Play the suites' fixed episodes with a built-in policy (controller+observer), "
@@ -58,6 +58,8 @@ def add_parsers(sub: Any) -> None:
 
 def add_call_timeout(p: argparse.ArgumentParser) -> None:
     """``--call-timeout S``: the watchdog of user code (:mod:`pendulum_lqg.util.watchdog`)."""
+    from pendulum_lqg.cli.options import Kind
+
     p.add_argument("--call-timeout", type=Kind("NonNegative"), default=None, metavar="S",
                    help="stop the run, naming the call, when one call into a plug-in or agent "
                         "(factory, reset, act) has not returned after S seconds; 0: never "

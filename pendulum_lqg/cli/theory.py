@@ -10,7 +10,7 @@ import json
 import math
 from typing import Any
 
-from pendulum_lqg.core import defaults
+from pendulum_lqg.problem import defaults
 
 #: ``theory``'s further options of the cart-pole, refused with ``--lti`` (beside
 #: :data:`~pendulum_lqg.cli.lti.CARTPOLE_OPTIONS`).
