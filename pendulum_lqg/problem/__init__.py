@@ -13,6 +13,7 @@ module              concept
 ``scenario``        :class:`~pendulum_lqg.problem.scenario.ScenarioSettings`: the scenario's settings
 ``env``             the Gymnasium environments' keyword layer (scenario, noise and env settings)
 ``experiment``      the experiment file's tables and grid routing, derived from the declarations
+``study``           the analysis studies' parameter tables (``[margins]``, ``[roa]``)
 ``frontends``       the command line's flags, derived from the declarations
 ``generate``        writes the derived files (``python -m pendulum_lqg.problem.generate [--check]``)
 ==================  ===========================================================================

@@ -15,6 +15,7 @@ bounds are msgspec's ``Meta`` constraints, and the words of the one-line error
 
 from __future__ import annotations
 
+import math
 import sys
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal, get_args, get_origin
@@ -146,22 +147,33 @@ def expected(kind: Any) -> str:
         inner = [a for a in args if a is not type(None)]
         return expected(inner[0]) + " or null" if len(inner) == 1 else "a value or null"
     if get_origin(base) is tuple:
-        n = b.get("min_length")
+        fixed = Ellipsis not in args
+        n = len(args) if fixed else b.get("min_length")
         item = expected(args[0])
-        return f"{n} {_plural(item)}" if n is not None else f"a list of {_plural(item)}"
+        return f"{n} {_plural(item)}" if n is not None and (fixed or n == b.get("max_length")) \
+            else f"a list of {_plural(item)}"
     if base is int:
         names = {0: "a non-negative integer", 1: "a positive integer"}
         return names.get(b["ge"], f"an integer ≥ {b['ge']}") if "ge" in b else "an integer"
     if base is float:
-        finite = b.get("le") == BIG
-        if "gt" in b and b["gt"] == 0:
-            return "a finite positive number" if finite else "a positive number or inf"
-        if b.get("ge") == 0 and b.get("lt") == 1:
-            return "a probability in [0, 1)"
-        if b.get("ge") == 0:
-            return "a finite number ≥ 0" if finite else "a number ≥ 0"
-        return "a finite number" if finite else "a number"
+        return _number_words(b)
     return {str: "a string", bool: "true or false", dict: "a table"}.get(base, str(base))
+
+
+def _number_words(b: dict[str, Any]) -> str:
+    """The words of a float's bounds ``b`` (``gt``, ``ge``, ``lt``, ``le``)."""
+    finite = b.get("le") == BIG
+    low = ("gt", b["gt"]) if "gt" in b else ("ge", b.get("ge"))
+    if low == ("gt", 0) and (finite or ("le" not in b and "lt" not in b)):
+        return "a finite positive number" if finite else "a positive number or inf"
+    if low == ("ge", 0) and (finite or ("le" not in b and "lt" not in b)):
+        return "a finite number ≥ 0" if finite else "a number ≥ 0"
+    if low == ("ge", 0) and b.get("lt") == 1:
+        return "a probability in [0, 1)"
+    if low == ("ge", -BIG) or low[1] is None:
+        return "a finite number" if finite else "a number"
+    high = ("]", b["le"]) if "le" in b else (")", b.get("lt", math.inf))
+    return f"a number in {'(' if low[0] == 'gt' else '['}{low[1]:g}, {high[1]:g}{high[0]}"
 
 
 def _plural(item: str) -> str:

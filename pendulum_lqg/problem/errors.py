@@ -78,17 +78,18 @@ def short(value: object) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def convert(data: Any, struct: type[T], *, where: str = "") -> T:
+def convert(data: Any, struct: type[T], *, where: str = "", key: str = "") -> T:
     """``data`` (a mapping) as the declaration ``struct``; a value that does not fit is one
-    :class:`ConfigError` line naming ``where`` (a file, or a table) and the key path."""
+    :class:`ConfigError` line naming ``where`` (a file) and the key path (under ``key``, the
+    table's own: ``margins.n_omega``)."""
     try:
         return msgspec.convert(data, struct)
     except msgspec.ValidationError as exc:
-        raise config_error(exc, data, struct, where) from None
+        raise config_error(exc, data, struct, where, key) from None
 
 
 def config_error(exc: msgspec.ValidationError, data: Any, struct: type,
-                 where: str = "") -> ConfigError:
+                 where: str = "", key: str = "") -> ConfigError:
     """The project's one line for msgspec's ``exc`` raised converting ``data`` to ``struct``."""
     from pendulum_lqg.problem.declare import expected
 
@@ -96,19 +97,23 @@ def config_error(exc: msgspec.ValidationError, data: Any, struct: type,
     prefix = f"{where}: " if where else ""
     if m := _UNKNOWN.match(message):
         known = ", ".join(getattr(struct, "__struct_fields__", ()))
-        return ConfigError(f"{prefix}{m['key']}: unknown key; known keys: {known}")
+        return ConfigError(f"{prefix}{key + '.' if key else ''}{m['key']}: unknown key; known "
+                           f"keys: {known}")
     if m := _MISSING.match(message):
-        return ConfigError(f"{prefix}{m['key']}: missing")
+        return ConfigError(f"{prefix}{key + '.' if key else ''}{m['key']}: missing")
     at = _AT.search(message)
     keys = re.findall(r"\.(\w+)|\[(\d+)\]", at["path"]) if at else []
     path = [k or int(i) for k, i in keys]
     value, kind = data, struct
-    for step in path:                     # the value found there, and the declared type
+    for step in path:                     # the value at the key, and its declared type
+        if not isinstance(step, str):
+            break
         try:
             value = value[step]
         except (KeyError, IndexError, TypeError):
             break
         if isinstance(step, str) and hasattr(kind, "__struct_fields__"):
             kind = get_type_hints(kind, include_extras=True).get(step, Any)
-    label = ".".join(str(k) for k in path if isinstance(k, str)) or "value"
+    label = ".".join([*([key] if key else []), *(k for k in path if isinstance(k, str))]) \
+        or "value"
     return ConfigError(f"{prefix}{label}: expected {expected(kind)}, got {short(value)}")
