@@ -57,7 +57,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 from pendulum_lqg.bench.study_params import parse_study_params
 from pendulum_lqg.core import defaults
@@ -361,10 +361,7 @@ def _grid_point(values: dict[str, Any], base: dict[str, dict[str, Any]],
         elif key == "delay_kind":
             continue                                     # with ``delay`` below
         elif key == "delay":
-            kind = values["delay_kind"]
-            if kind not in DELAY_KINDS:
-                raise ConfigError(f"grid.delay_kind: expected 'measurement' or 'actuator', got "
-                                  f"{kind!r}")
+            kind = check("grid.delay_kind", values["delay_kind"], Literal[DELAY_KINDS])
             tables["scenario"][f"{kind}_delay"] = value
         elif key == "theta0":
             x0 = list(tables["scenario"].get("x0", defaults.X0))
@@ -446,8 +443,7 @@ def _checked_tables(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
     base = {table: dict(data.get(table, {}))
             for table in ("scenario", "noise", "design", "model")}
     for key in ("name", "description"):
-        if key in data and not isinstance(data[key], str):
-            raise ConfigError(f"{key}: expected a string, got {data[key]!r}")
+        check(key, data.get(key, ""), str)
     if "name" in data:
         check_name(str(data["name"]))
     return base

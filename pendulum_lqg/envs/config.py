@@ -25,7 +25,7 @@ from pendulum_lqg.envs.keywords import EnvKeywords
 from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
 from pendulum_lqg.model.plant import ModelOverrides, Plant, Randomization, load_plant
 from pendulum_lqg.problem import defaults
-from pendulum_lqg.problem.declare import coerce, declared
+from pendulum_lqg.problem.declare import PositiveInt, check, coerce, declared
 from pendulum_lqg.problem.env import EnvSettings, env_keywords
 
 ObservationMode = Literal["measurement", "state"]
@@ -57,9 +57,7 @@ def _overrides(value: object) -> ModelOverrides:
 
 
 def positive_int(name: str, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-        raise ConfigError(f"{name}: expected a positive integer, got {value!r}")
-    return int(value)
+    return int(check(name, value, PositiveInt))
 
 
 
@@ -185,8 +183,7 @@ class Actions:
     """
 
     def __init__(self, u_max: float, normalize: object) -> None:
-        if not isinstance(normalize, bool):
-            raise ConfigError(f"normalize_action: expected True or False, got {normalize!r}")
+        normalize = bool(check("normalize_action", normalize, bool))
         if normalize and not math.isfinite(u_max):
             raise ConfigError("normalize_action: needs a finite force_limit (an action in [−1, 1] "
                               "maps onto [−force_limit, force_limit])")
