@@ -67,8 +67,8 @@ from pendulum_lqg.model.plant import ModelOverrides, Plant
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS
 from pendulum_lqg.policies.spec import DesignSpec
 from pendulum_lqg.problem.declare import check
+from pendulum_lqg.problem.errors import check_keys
 from pendulum_lqg.problem.experiment import RUN_SETTINGS, SCENARIO_GRID_KEYS, SCENARIO_KEYS
-from pendulum_lqg.util.config import check_keys
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario

@@ -10,9 +10,8 @@ from typing import Any
 import msgspec
 
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.problem.errors import convert
+from pendulum_lqg.problem.errors import check_keys, convert
 from pendulum_lqg.problem.study import STUDIES
-from pendulum_lqg.util.config import check_keys
 from pendulum_lqg.util.limits import MAX_FREQUENCIES, MAX_MAP_POINTS, check_at_most
 
 #: Parameters of each study and their defaults (declared in :mod:`pendulum_lqg.problem.study`).

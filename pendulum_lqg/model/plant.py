@@ -21,7 +21,7 @@ import numpy as np
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.problem.declare import positive_number
-from pendulum_lqg.util.config import check_keys
+from pendulum_lqg.problem.errors import check_keys
 from pendulum_lqg.util.limits import MAX_STEPS_PER_PERIOD, check_control_period
 
 STATE_NAMES: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")

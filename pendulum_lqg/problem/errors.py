@@ -9,7 +9,7 @@ adapter keeps the path (as dotted keys), words the expectation from the declared
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar, get_type_hints
 
@@ -68,6 +68,18 @@ class Where:
             return check(value)
         except Invalid as exc:
             raise self.error(f"expected {exc.expected}, got {short(value)}", key) from None
+
+
+def check_keys(where: str, table: Any, known: Sequence[str]) -> None:
+    """``table`` must be a mapping whose keys are all in ``known``: the one check of every
+    configuration table (experiment TOML tables, study tables, model overrides, randomisation);
+    the error names ``where``, the first unknown key and lists the known ones (msgspec's own
+    ``forbid_unknown_fields`` names the key but not the known ones)."""
+    if not isinstance(table, Mapping):
+        raise ConfigError(f"{where}: expected a table, got {type(table).__name__}")
+    unknown = sorted(set(table) - set(known))
+    if unknown:
+        raise ConfigError(f"{where}: unknown key {unknown[0]!r}; known keys: " + ", ".join(known))
 
 
 def short(value: object) -> str:
