@@ -336,3 +336,14 @@ def test_the_tests_mirror_the_package():
             f"{rel}: named for none of {sorted(names)}"
     missing = {q.parent.name for q in PKG.glob("*/__init__.py") if not (tests / q.parent.name).is_dir()}
     assert not missing, f"packages without a test folder: {sorted(missing)}"
+
+
+def test_the_plant_is_a_type_not_a_flag():
+    """The core, the bench and the analyses ask a plant through its interface
+    (:class:`pendulum_lqg.model.interface.SimulatedPlant`) and a configuration through its plant
+    source (:mod:`pendulum_lqg.bench.sources`), never through a flag of which kind it is."""
+    flag = re.compile(r"is_lti|lti_file is not None")
+    hits = [f"{p.relative_to(ROOT)}:{i}" for p in sorted(PKG.rglob("*.py"))
+            for i, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+            if flag.search(line)]
+    assert not hits, hits

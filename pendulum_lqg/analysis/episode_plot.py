@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.model.lti import LTIPlant
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -58,7 +59,7 @@ def state_labels(n: int) -> tuple[str, ...]:
     return STATE_LABELS if n == 4 else tuple(f"x{i + 1}" for i in range(n))
 
 
-def plot_episode(trajectory: Trajectory, *, plant: Plant | None = None,
+def plot_episode(trajectory: Trajectory, *, plant: Plant | LTIPlant | None = None,
                  scenario: Scenario | None = None, title: str | None = None) -> Figure:
     """A figure of one episode: a panel per state, then the measurement y and the force u (a plant
     given as matrices: a panel per state, per output and per input, named by its file).
@@ -80,15 +81,22 @@ def plot_episode(trajectory: Trajectory, *, plant: Plant | None = None,
         output and input names (:func:`_plot_lti`). Save it with :func:`save_episode_plot`; in
         Jupyter it shows inline as the cell's value.
     """
-    import matplotlib
-
     t = np.asarray(trajectory.t, dtype=float)
     x = np.asarray(trajectory.x, dtype=float)
     if t.ndim != 1 or t.size == 0 or x.shape[0] != t.size:
         raise ConfigError(f"trajectory: expected sample times t (N,) and states x (N, n) with "
                           f"N ≥ 1, got t {t.shape} and x {x.shape}")
-    if getattr(plant, "is_lti", False):
-        return _plot_lti(trajectory, plant, scenario, title)
+    return _figure(plant, trajectory, scenario, title)
+
+
+@functools.singledispatch
+def _figure(plant: Any, trajectory: Trajectory, scenario: Scenario | None,
+            title: str | None) -> Figure:
+    """The figure of the cart-pole's episode (or of a trajectory without a plant); a plant given
+    as matrices has its own (:func:`_plot_lti`, registered below)."""
+    import matplotlib
+
+    x = np.asarray(trajectory.x, dtype=float)
     n = x.shape[1]
     labels = state_labels(n)
     limits, u_max = _limits(plant, scenario, n)
@@ -241,7 +249,9 @@ def episode_title(tr: Trajectory) -> str:
     return f"episode {tr.episode} (seed {tr.seed}): {outcome}"
 
 
-def _plot_lti(tr: Trajectory, plant: Any, scenario: Scenario | None, title: str | None) -> Figure:
+@_figure.register(LTIPlant)
+def _plot_lti(plant: LTIPlant, tr: Trajectory, scenario: Scenario | None,
+              title: str | None) -> Figure:
     """The figure of an LTI plant's episode: ``n`` state panels (x, x̂ ± 2σ, the state's failure
     limit), ``p`` output panels (y and the noise-free ``C x``), ``m`` input panels (u applied, u
     asked where it differs, the input's limit in force), two columns, each labelled with the

@@ -7,6 +7,7 @@ module            concept
                   and its :class:`~pendulum_lqg.bench.experiments.WorkUnit` s
 ``study_params``  the parameter tables of the studies an experiment may name (margins, ROA)
 ``lti``           experiments on a plant given as matrices (``lti_file = "…"``)
+``sources``       where a configuration's plant comes from: the cart-pole's MJCF or an ``lti_file``
 ``results``       results folders: written incrementally and atomically, resumable
 ``sweep``         :func:`~pendulum_lqg.bench.sweep.run_sweep`: an experiment's units on an executor
 ``executors``     where the units run: in this process, or as Ray tasks

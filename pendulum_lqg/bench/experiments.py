@@ -49,7 +49,6 @@ independent, so they can run in any order or on other machines; :func:`run_unit`
 from __future__ import annotations
 
 import dataclasses
-import functools
 import hashlib
 import itertools
 import json
@@ -59,6 +58,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
+from pendulum_lqg.bench.sources import PlantSource, choose_source
 from pendulum_lqg.bench.study_params import parse_study_params
 from pendulum_lqg.core import defaults
 from pendulum_lqg.core.noise import NoiseModel
@@ -140,19 +140,15 @@ class Configuration:
     def label(self) -> str:
         return ", ".join(f"{k}={v}" for k, v in self.values.items()) or "default"
 
+    @property
+    def source(self) -> PlantSource:
+        """Where its plant comes from: the cart-pole's MJCF or its ``lti_file``
+        (:mod:`pendulum_lqg.bench.sources`)."""
+        return choose_source(self.lti_file)
+
     def build(self) -> tuple[Scenario, DesignSpec]:
         """``(Scenario, DesignSpec)`` of this configuration (validated)."""
-        from pendulum_lqg.core.scenario import Scenario
-
-        if self.lti_file is not None:
-            from pendulum_lqg.bench.lti import lti_build
-
-            return lti_build(self)
-
-        noise = NoiseModel(**self.noise)
-        overrides = ModelOverrides.from_mapping(self.model)
-        scenario = Scenario(noise=noise, overrides=overrides, **self.scenario)
-        return scenario, DesignSpec(**self.design)
+        return self.source.build(self)
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
@@ -161,61 +157,13 @@ class Configuration:
         """``(nominal, simulated)``: the model the designs believe in (the XML as it is) and the
         one simulated (with the scenario's mismatch overrides; the same object when there are
         none)."""
-        from pendulum_lqg.model.plant import load_plant
-
-        if self.lti_file is not None:
-            from pendulum_lqg.bench.lti import lti_plant
-
-            lti = lti_plant(self.lti_file)
-            return lti, lti
-        if scenario is None:
-            scenario, _ = self.build()
-        overrides = scenario.overrides
-        nominal = load_plant(self.model_file)
-        simulated = nominal if overrides.is_empty() else load_plant(self.model_file,
-                                                                    overrides=overrides)
-        return nominal, simulated
+        return self.source.plants(self, scenario)
 
     def validate(self) -> None:
         """Build the configuration, check it against the (possibly overridden) model and design
         its built-in policy (once per distinct design), so that a design that fails — a Kalman
         filter on a singular ``measurement_variance``, say — stops the parse, not the sweep."""
-        from pendulum_lqg.model.plant import steps_per_period
-        from pendulum_lqg.policies.lqg import delay_periods
-
-        scenario, spec = self.build()       # the Scenario checks the duration ceiling
-        if self.lti_file is not None:
-            from pendulum_lqg.bench.lti import lti_policy
-            from pendulum_lqg.core.layout import layout
-
-            layout(self.plants()[1], scenario)          # what its loop cannot run, refused now
-            lti_policy(self, scenario, spec)
-            return
-        steps_per_period(_simulated_plant(self.model_file, scenario.overrides),
-                         scenario.control_period)
-        if self.plugin is None:             # a plugin's factory runs with its units only
-            _designed(self.model_file, scenario.control_period, scenario.noise.with_scale(1.0),
-                      spec, delay_periods(scenario))
-
-
-@functools.lru_cache(maxsize=32)
-def _simulated_plant(model_file: str | None, overrides: ModelOverrides) -> Plant:
-    """The plant a configuration simulates, compiled once per (file, overrides) while a grid is
-    validated (a grid over noise or policies shares one model)."""
-    from pendulum_lqg.model.plant import load_plant
-
-    return load_plant(model_file, overrides=overrides)
-
-
-@functools.lru_cache(maxsize=256)
-def _designed(model_file: str | None, control_period: float, noise: NoiseModel,
-              spec: DesignSpec, delays: tuple[int, int]) -> None:
-    """Design a configuration's built-in policy on the nominal plant (the design ignores the
-    noise scale; a grid over noise, model scales or policies repeats few designs)."""
-    from pendulum_lqg.policies.lqg import design_policy
-
-    design_policy(_simulated_plant(model_file, ModelOverrides()), control_period, noise, spec,
-                  delays=delays)
+        self.source.validate(self)
 
 
 #: Names the designs give their data, and the experiment keys those come from.
@@ -553,18 +501,13 @@ def load_spec(name_or_path: str, *, episodes: int | None = None, seed: int | Non
 def run_unit(unit: WorkUnit, *, nthread: int | None = None) -> list[dict[str, Any]]:
     """Run one work unit; rows carry the configuration's grid values and index."""
     from pendulum_lqg.core.runner import run_episodes
-    from pendulum_lqg.policies.loading import build_policy, check_source
+    from pendulum_lqg.policies.loading import check_source
 
     scenario, spec = unit.config.build()
     nominal, simulated = unit.config.plants(scenario)
     if unit.config.plugin is not None:       # the code the experiment's fingerprint describes
         check_source(unit.config.plugin, unit.config.plugin_source)
-    if unit.config.lti_file is not None:
-        from pendulum_lqg.bench.lti import lti_policy
-
-        policy = lti_policy(unit.config, scenario, spec)
-    else:
-        policy = build_policy(unit.config.plugin, plant=nominal, scenario=scenario, spec=spec)
+    policy = unit.config.source.policy(unit.config, scenario, spec, nominal)
     res = run_episodes(simulated, scenario, policy, seed=unit.seed,
                        episodes=range(unit.start, unit.stop), nthread=nthread)
     out = []

@@ -137,10 +137,12 @@ def lti_theory_entry(cfg: Any) -> dict[str, Any] | None:
         out[f"rms_est_err_{s}"] = res.estimate_error_std[s]
     if plant.n_inputs == 1:             # the theory's u_std is one input's
         out["rms_u"] = res.u_std
+    out.update({f"rms_{u}": v for u, v in res.u_std_by_input.items()})
     out.update(cost_rate=res.cost_rate, cost_J=res.cost_J, verdict=res.verdict)
     ep = res.episode                 # expected over the episode from x₀, x̂₀ (after the burn-in)
     out["episode"] = {**{f"rms_{s}": v for s, v in ep.rms.items()},
                       **({"rms_u": ep.u_rms} if plant.n_inputs == 1 else {}),
+                      **{f"rms_{u}": v for u, v in ep.u_rms_by_input.items()},
                       **{f"rms_est_err_{s}": v for s, v in ep.estimate_error_rms.items()},
                       "cost_J": ep.cost_J, "burn_in": ep.burn_in}
     return out

@@ -25,6 +25,7 @@ Layout of a results folder::
 from __future__ import annotations
 
 import csv
+import functools
 import hashlib
 import json
 import shutil
@@ -34,10 +35,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pendulum_lqg.bench.experiments import check_name
+from pendulum_lqg.bench.sources import MJCF, LTISource, PlantSource
 from pendulum_lqg.boundary import read_bytes
 from pendulum_lqg.boundary.schemas import unit_record
-from pendulum_lqg.core.metrics import EPISODE_FIELDS, summarize, summary_metrics
-from pendulum_lqg.errors import ConfigError, PendulumLQGError
+from pendulum_lqg.core.metrics import summarize, summary_metrics
+from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.util.files import FileLock, atomic_write, read_csv, rows_to_csv
 from pendulum_lqg.version import SCHEMA_VERSION, versions
 
@@ -243,11 +245,7 @@ def unit_columns(unit: WorkUnit) -> list[str]:
 def config_fields(cfg: Configuration) -> tuple[str, ...]:
     """The episode fields of a configuration: the cart-pole's, or an LTI plant's (named after
     its states)."""
-    if cfg.lti_file is None:
-        return EPISODE_FIELDS
-    from pendulum_lqg.bench.lti import lti_fields
-
-    return lti_fields(cfg)
+    return cfg.source.fields(cfg)
 
 
 def _unit_record(unit: WorkUnit, spec: ExperimentSpec, data: bytes) -> dict[str, Any]:
@@ -312,32 +310,9 @@ def config_theory(cfg: Configuration) -> dict[str, Any] | None:
     holds the expected RMS over one episode from the configuration's x₀ and x̂₀ (after its
     ``burn_in``) and the expected J, in the Monte Carlo's column names (summary.json only: the
     Markdown table keeps its stationary columns)."""
-    from pendulum_lqg.policies.loading import build_policy
-    from pendulum_lqg.policies.theory import policy_theory
-
     if cfg.plugin is not None:
         return None
-    if cfg.lti_file is not None:
-        from pendulum_lqg.bench.lti import lti_theory_entry
-
-        return lti_theory_entry(cfg)
-    try:
-        scenario, spec = cfg.build()
-        nominal, simulated = cfg.plants(scenario)
-        policy = build_policy(None, plant=nominal, scenario=scenario, spec=spec)
-        res = policy_theory(simulated, scenario, policy)
-    except PendulumLQGError:
-        return None
-    ep = res.episode
-    episode = None if ep is None else {
-        "rms_theta": ep.rms["theta"], "rms_p": ep.rms["p"], "rms_u": ep.u_rms,
-        **{f"rms_est_err_{s}": v for s, v in ep.estimate_error_rms.items()},
-        "cost_J": ep.cost_J, "burn_in": ep.burn_in}
-    return {"plant": res.plant, "spectral_radius": res.spectral_radius, "stable": res.stable,
-            "rms_theta": res.rms["theta"], "rms_p": res.rms["p"], "rms_u": res.u_std,
-            "rms_est_err_theta": res.estimate_error_std["theta"],
-            "rms_est_err_p_dot": res.estimate_error_std["p_dot"], "cost_rate": res.cost_rate,
-            "cost_J": res.cost_J, "verdict": res.verdict, "episode": episode}
+    return cfg.source.theory(cfg)
 
 
 def _stat_cell(stat: dict[str, float], digits: int = 3) -> str:
@@ -355,8 +330,15 @@ def _theory_cell(theory: dict[str, Any], key: str) -> str:
 
 def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
     """The summary as a Markdown table (one row per configuration)."""
-    if spec.configurations and spec.configurations[0].lti_file is not None:
-        return _lti_markdown_table(spec, summary)
+    if not spec.configurations:
+        return _table(MJCF, spec, summary)
+    return _table(spec.configurations[0].source, spec, summary)
+
+
+@functools.singledispatch
+def _table(source: PlantSource, spec: ExperimentSpec, summary: dict[str, Any]) -> str:
+    """The cart-pole's table; a plant given as matrices has its own (:func:`_lti_markdown_table`,
+    registered below)."""
     configs = summary["configurations"]
     keys = list(spec.configurations[0].values) if spec.configurations else []
     head = [*keys, "success [95 % CI]", "J (successes)", "RMS θ [rad]", "theory", "max abs θ [rad]",
@@ -385,7 +367,8 @@ def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _lti_markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
+@_table.register(LTISource)
+def _lti_markdown_table(source: LTISource, spec: ExperimentSpec, summary: dict[str, Any]) -> str:
     """The summary of an experiment on an LTI plant: per state its RMS and the theory's, per
     state the RMS estimation error and the theory's (the state names of the plant's file)."""
     cfg0 = spec.configurations[0]
@@ -399,7 +382,7 @@ def _lti_markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
             *(h for u in inputs for h in (f"RMS {u}", "theory")), "saturated",
             *(h for s in states for h in (f"RMS error {s}", "theory")), "loop radius",
             "failures"]
-    lines = [f"**{spec.name}** — LTI plant `{Path(str(cfg0.lti_file)).name}`, {spec.episodes} "
+    lines = [f"**{spec.name}** — LTI plant `{Path(source.path).name}`, {spec.episodes} "
              f"episodes per configuration, seed {spec.seed}; each *theory* column is the "
              "stationary value of the loop (`pendulum-lqg theory --lti`), the loop radius its "
              "spectral radius", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]

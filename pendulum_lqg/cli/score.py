@@ -29,7 +29,8 @@ def add_parsers(sub: Any) -> None:
                         "linear:FILE.json (a linear controller of a y/u history)")
     p.add_argument("--suite", action="append", default=None, metavar="NAME",
                    help="suite name or file (repeatable), or 'all' (the default): "
-                        "full-state, lecture, mismatch, delayed, lossy, noisy, hard")
+                        "full-state, lecture, mismatch, delayed, lossy, noisy, hard; a file "
+                        "naming an lti_file is a suite of that plant (built-in policies only)")
     p.add_argument("--episodes", type=Kind("PositiveInt"), default=None, metavar="N",
                    help="episodes per suite (default: the suite's own, 100; fewer is a quick "
                         "score whose fingerprint differs from the full one)")
@@ -67,6 +68,7 @@ def add_call_timeout(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_score(args: argparse.Namespace) -> int:
+    from pendulum_lqg.scoreboard.lti_suite import names_an_lti_plant
     from pendulum_lqg.scoreboard.score import score_entry
     from pendulum_lqg.scoreboard.suites import load_suite, suite_names
     from pendulum_lqg.util.files import atomic_write, output_file
@@ -76,12 +78,15 @@ def cmd_score(args: argparse.Namespace) -> int:
     out = None if args.out is None else output_file("--out", args.out, what="score (JSON)")
     wanted = args.suite or ["all"]
     names = suite_names() if "all" in wanted else wanted
-    suites = [load_suite(n).with_episodes(args.episodes) for n in names]
+    lti = [n for n in names if names_an_lti_plant(n)]    # a plant given as matrices
+    suites = [load_suite(n).with_episodes(args.episodes) for n in names if n not in lti]
     with call_timeout(args.call_timeout), Progress("score", len(suites), unit="suites") as bar:
         doc = score_entry(suites, policy=args.policy, agent=args.agent,
                           normalize_action=args.normalize_action, nthread=args.nthread,
                           base_dir=Path.cwd(), noise_scale=args.noise_scale,
                           on_suite=lambda name: bar.advance(description=f"scored {name}"))
+    if lti:
+        doc["suites"].update(_lti_entries(args, lti))
     text = json.dumps(doc, indent=1, allow_nan=False)
     if out is not None:
         atomic_write(out, text + "\n")
@@ -90,6 +95,15 @@ def cmd_score(args: argparse.Namespace) -> int:
     else:
         _print_score(doc)
     return 0
+
+
+def _lti_entries(args: argparse.Namespace, files: list[str]) -> dict[str, Any]:
+    """The entries of the LTI suites among ``--suite`` (:mod:`pendulum_lqg.scoreboard.lti_suite`)."""
+    from pendulum_lqg.scoreboard.lti_suite import load_lti_suite, lti_suite_entries
+
+    return lti_suite_entries([load_lti_suite(f) for f in files], policy=args.policy,
+                             agent=args.agent, episodes=args.episodes,
+                             noise_scale=args.noise_scale)
 
 
 def _print_score(doc: dict[str, Any]) -> None:

@@ -6,10 +6,12 @@ the Scenario fields of the limit options ``run`` shares (the grammar of both is 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 from typing import Any
 
+from pendulum_lqg.model.lti import LTIPlant
 from pendulum_lqg.problem import defaults
 
 #: ``theory``'s further options of the cart-pole, refused with ``--lti`` (beside
@@ -108,7 +110,8 @@ def _print_table(results: dict[str, Any], header: str) -> None:
     shown = first.state_names[:2]                  # the first two states (one for a 1-state plant)
     unit = dict(zip(first.state_names, first.units, strict=True))
     t.add_column("policy", no_wrap=True)          # a policy's name is never cut
-    for col in ("radius", *(_head("std", s, unit[s]) for s in shown), "std u",
+    u = next(iter(first.u_std_by_input), "u")    # several inputs: the first one's column
+    for col in ("radius", *(_head("std", s, unit[s]) for s in shown), f"std {u}",
                 _head("std error of", shown[-1], unit[shown[-1]]), "J"):
         t.add_column(escape(col))
     for name, r in results.items():
@@ -135,7 +138,8 @@ def _print_episode_table(results: dict[str, Any], header: str, burn_in: float) -
     unit = dict(zip(first.state_names, first.units, strict=True))
     t = Table()
     t.add_column("policy", no_wrap=True)
-    for col in (*(_head("RMS", s, unit[s]) for s in shown), "RMS u",
+    u = next(iter(first.u_std_by_input), "u")
+    for col in (*(_head("RMS", s, unit[s]) for s in shown), f"RMS {u}",
                 _head("RMS error of", shown[-1], unit[shown[-1]]), "E[J]"):
         t.add_column(escape(col))
     for name, r in results.items():
@@ -152,7 +156,6 @@ def run_theory_lines(plant: Any, scenario: Any, policy: Any) -> tuple[dict[str, 
     limits off, as ``(to_dict() or None, lines to print)``; a loop the theory does not model
     (plug-ins, delays, dropout, lags, force noise) gives ``None`` and one line saying why."""
     from pendulum_lqg.errors import PendulumLQGError
-    from pendulum_lqg.policies.theory import policy_theory
 
     if getattr(policy, "K", None) is None or getattr(policy, "estimator", None) is None:
         return None, ["theory: not for this loop (a plug-in policy; the theory takes the "
@@ -160,36 +163,54 @@ def run_theory_lines(plant: Any, scenario: Any, policy: Any) -> tuple[dict[str, 
     if not scenario.randomize.is_empty():
         return None, ["theory: not for this loop (randomised plants)"]
     try:
-        if getattr(plant, "is_lti", False):
-            from pendulum_lqg.policies.lti import lti_theory
-
-            name = str(policy.name)
-            for field in ("measurement_delay", "actuator_delay", "dropout"):
-                if getattr(scenario, field):
-                    raise PendulumLQGError(f"{field}: the theory covers the plain sampled loop")
-            res = lti_theory(plant, (name,), noise_scale=scenario.noise.scale,
-                             duration=scenario.n_periods * scenario.control_period,
-                             estimate0=scenario.estimate0, burn_in=scenario.burn_in)[name]
-        else:
-            res = policy_theory(plant, scenario, policy)
+        res = _loop_theory(plant, scenario, policy)
     except PendulumLQGError as exc:
         return None, [f"theory: not for this loop ({exc})"]
     ep = res.episode
     after = f" after {ep.burn_in:g} s" if ep.skip else ""
     names = res.state_names
     lines = [f"theory ({res.plant} loop, limits off), expected RMS over the episode{after}: "
-             + _values(names, ep.rms, ep.u_rms, ep.estimate_error_rms),
-             "theory, stationary std: " + _values(names, res.std, res.u_std,
+             + _values(names, ep.rms, ep.u_rms_by_input or {"u": ep.u_rms},
+                       ep.estimate_error_rms),
+             "theory, stationary std: " + _values(names, res.std,
+                                                   res.u_std_by_input or {"u": res.u_std},
                                                    res.estimate_error_std)]
     return res.to_dict(), lines
 
 
-def _values(names: tuple[str, ...], x: dict[str, float], u: float, err: dict[str, float]) -> str:
-    """``p 0.1, θ 0.02, …, u 0.3; error p 0.01, …`` with 4 significant digits."""
+@functools.singledispatch
+def _loop_theory(plant: Any, scenario: Any, policy: Any) -> Any:
+    """The cart-pole's stationary loop (:func:`~pendulum_lqg.policies.theory.policy_theory`)."""
+    from pendulum_lqg.policies.theory import policy_theory
+
+    return policy_theory(plant, scenario, policy)
+
+
+@_loop_theory.register(LTIPlant)
+def _lti_loop_theory(plant: LTIPlant, scenario: Any, policy: Any) -> Any:
+    """A plant given as matrices: its own stationary loop
+    (:func:`~pendulum_lqg.policies.lti.lti_theory`), of the plain sampled loop only."""
+    from pendulum_lqg.errors import PendulumLQGError
+    from pendulum_lqg.policies.lti import lti_theory
+
+    name = str(policy.name)
+    for field in ("measurement_delay", "actuator_delay", "dropout"):
+        if getattr(scenario, field):
+            raise PendulumLQGError(f"{field}: the theory covers the plain sampled loop")
+    return lti_theory(plant, (name,), noise_scale=scenario.noise.scale,
+                      duration=scenario.n_periods * scenario.control_period,
+                      estimate0=scenario.estimate0, burn_in=scenario.burn_in)[name]
+
+
+def _values(names: tuple[str, ...], x: dict[str, float], u: dict[str, float],
+            err: dict[str, float]) -> str:
+    """``p 0.1, θ 0.02, …, u 0.3; error p 0.01, …`` with 4 significant digits (each input by
+    name)."""
     label = {"theta": "θ", "p_dot": "ṗ", "theta_dot": "θ̇"}
     states = ", ".join(f"{label.get(s, s)} {x[s]:.4g}" for s in names)
     errors = ", ".join(f"{label.get(s, s)} {err[s]:.4g}" for s in names)
-    return f"{states}, u {u:.4g}; estimate error {errors}"
+    inputs = ", ".join(f"{k} {v:.4g}" for k, v in u.items())
+    return f"{states}, {inputs}; estimate error {errors}"
 
 
 def _head(what: str, name: str, unit: str) -> str:

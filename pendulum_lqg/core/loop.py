@@ -126,7 +126,8 @@ class Simulator:
         self._streamed = bool(streamed_metrics)
         self._one_force = np.zeros(1)                      # step_one's force as a one-row array
         self.metrics: MetricsAccumulator | None = None
-        self.sensing = SensingActuation(plant, scenario, self.k, outputs=lay.p)
+        self.sensing = SensingActuation(plant, scenario, self.k, outputs=lay.p,
+                                        inputs=len(lay.inputs))
         # measure_one's own path: plain sensing of y = [p, θ] (else it is measure()'s first row)
         self._plain_one = self.sensing.plain_sensing and self._C is None
         self._theta_max = scenario.theta_max

@@ -37,7 +37,6 @@ steps, and at the end (after the state noise).
 from __future__ import annotations
 
 import functools
-import math
 from typing import TYPE_CHECKING, cast, overload
 
 import numpy as np
@@ -45,7 +44,7 @@ import numpy as np
 if TYPE_CHECKING:
     from pendulum_lqg.core.period import PeriodView
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.model.interface import SimulatedPlant
 
 #: Any state component beyond this magnitude counts as divergence.
 RUNAWAY = 1e6
@@ -58,7 +57,7 @@ FAIL_REASONS: dict[int, str] = {FAIL_NONE: "", FAIL_POLE: "pole_fell", FAIL_TRAC
 
 
 # ---- limits -------------------------------------------------------------------------------------
-def limits(plant: Plant, scenario: Scenario) -> tuple[float, float, float]:
+def limits(plant: SimulatedPlant, scenario: Scenario) -> tuple[float, float, float]:
     """``(theta_max, track_limit, u_max)`` in force for ``scenario`` on ``plant`` [rad, m, N].
 
     The scenario's ``track_limit`` / ``force_limit`` when given, else the MJCF slider ``range`` and
@@ -67,25 +66,11 @@ def limits(plant: Plant, scenario: Scenario) -> tuple[float, float, float]:
     a larger limit would be a rule the physics never lets fire: it is refused (one line naming
     the limit); the linear plants take any. An LTI plant (:mod:`pendulum_lqg.model.lti`) has no pole and
     no track (``θ_max`` and the track are ``inf``: its own ``state_limits`` are the failure rule,
-    :func:`detect_failure`) and its file's ``force_limit`` unless the scenario sets one.
+    :func:`detect_failure`) and its file's ``force_limit`` unless the scenario sets one. Each
+    plant holds its rule (:meth:`SimulatedPlant.limits
+    <pendulum_lqg.model.interface.SimulatedPlant.limits>`).
     """
-    from pendulum_lqg.errors import ConfigError
-
-    if getattr(plant, "is_lti", False):
-        return (math.inf, math.inf,
-                plant.u_max if scenario.force_limit is None else scenario.force_limit)
-    track = plant.track_limit if scenario.track_limit is None else scenario.track_limit
-    u_max = plant.u_max if scenario.force_limit is None else scenario.force_limit
-    if scenario.plant == "mujoco":
-        for name, value, model, where in (
-                ("track_limit", track, plant.track_limit, "slider range"),
-                ("force_limit", u_max, plant.u_max, "actuator ctrlrange (model override "
-                                                    "force_limit)")):
-            if value > model:
-                raise ConfigError(f"{name}: {value:g} is beyond the MuJoCo model's {where} "
-                                  f"±{model:g}; use a linear plant (plant = 'linear-zoh' or "
-                                  f"'linear-euler') or a model with a wider one")
-    return scenario.theta_max, track, u_max
+    return plant.limits(scenario)
 
 
 # ---- saturation ---------------------------------------------------------------------------------

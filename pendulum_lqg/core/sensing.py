@@ -9,8 +9,8 @@ and emptied when a row (re)starts:
 * dropouts: a lost sample becomes ``[nan, nan]``; one uniform per period from the episode's child
   generator (:func:`~pendulum_lqg.core.seeding.child_generator`), so the episode's noise stream is
   the same with and without losses;
-* actuator delay ``d_a`` periods: a ring ``(n, d_a)`` of requested forces (0 N until the first
-  arrives);
+* actuator delay ``d_a`` periods: a ring ``(n, d_a)`` of requested forces (``(n, d_a, m)`` for a
+  plant of m > 1 inputs; 0 until the first arrives);
 * actuator lag τ: the first-order response ``f_j = u + (f_{j−1} − u)·e^{−h/τ}`` at the end of
   each physics step j, so the physics gets a force per step;
 * randomised models: each episode's simulated model from three uniforms of its child generator
@@ -43,11 +43,14 @@ class SensingActuation:
     scenario : the delays, dropout, lag and randomisation to apply
     k : physics steps per control period
     outputs : the length of the measurement y (the cart-pole's 2)
+    inputs : the length of u (1: u is one number per row)
     """
 
-    def __init__(self, plant: Plant, scenario: Scenario, k: int, *, outputs: int = 2) -> None:
+    def __init__(self, plant: Plant, scenario: Scenario, k: int, *, outputs: int = 2,
+                 inputs: int = 1) -> None:
         self.plant, self.scenario = plant, scenario
         self.outputs = outputs                                  # the length of y
+        self.input_shape = () if inputs == 1 else (inputs,)    # one row's u
         self.meas_delay = scenario.measurement_delay_periods     # whole control periods
         self.act_delay = scenario.actuator_delay_periods
         self.dropout = scenario.dropout
@@ -73,7 +76,7 @@ class SensingActuation:
         if rows is None:
             n = len(generators)
             self.y_ring = np.full((n, self.meas_delay, self.outputs), np.nan)     # nothing has arrived yet
-            self.u_ring = np.zeros((n, self.act_delay))                # 0 N until the first force
+            self.u_ring = np.zeros((n, self.act_delay, *self.input_shape))   # 0 until the first
             self.force = np.zeros(n)                            # the lag's output
         else:
             self.y_ring[rows] = np.nan
@@ -110,8 +113,9 @@ class SensingActuation:
         return y
 
     def actuate(self, u: np.ndarray, period: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-        """The actuator delay line and lag for the requested (saturated) forces ``u`` (n,) of rows
-        at periods ``period``: ``(command, steps)`` — the command reaching the actuator (n,) (after
+        """The actuator delay line and lag for the requested (saturated) forces ``u`` (n,) — or
+        (n, m) with several inputs, delay only — of rows at periods ``period``: ``(command,
+        steps)`` — the command reaching the actuator (n,) or (n, m) (after
         the delay; what the metrics' ``u`` is), and with a lag the force of each physics step
         (n, k), else ``None``."""
         if self.act_delay:

@@ -1,10 +1,12 @@
 """The plants: the MuJoCo cart-pole (its MJCF the one source of its parameters) and plants as matrices.
 
-=============  ========================================================================
-module         concept
-=============  ========================================================================
-``plant``      the MuJoCo cart-pole: loading with overrides, named read-outs, ``x = [p, θ, ṗ, θ̇]``
-``linearize``  the cart-pole's continuous ``(A, B, C, D)`` about the upright, by finite differences
-``lti``        any linear plant given as matrices (TOML or ``.npz``), sampled at T
-=============  ========================================================================
+==============  ==============================================================================
+module          concept
+==============  ==============================================================================
+``interface``   ``SimulatedPlant``, what every plant is (``Layout``, limits, models)
+``plant``       the MuJoCo cart-pole: loading with overrides, read-outs, ``x = [p, θ, ṗ, θ̇]``
+``linearize``   the cart-pole's continuous ``(A, B, C, D)`` by finite differences
+``lti``         any linear plant given as matrices (TOML or ``.npz``), sampled at T
+``lti_layout``  the ``Layout`` of a plant given as matrices (names, x₀, noise, weights)
+==============  ==============================================================================
 """

@@ -15,13 +15,39 @@ State ``x = [p, θ, ṗ, θ̇]``, input the cart force [N], output ``y = [p, θ]
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import mujoco
 import numpy as np
 
 from pendulum_lqg.design import zoh
 from pendulum_lqg.design.structure import StructureReport, structure
-from pendulum_lqg.model.plant import Plant, steps_per_period
+from pendulum_lqg.model.interface import SimulatedPlant, steps_per_period
+
+
+class CartPoleModel(SimulatedPlant, Protocol):
+    """What the linearisation reads of the cart-pole (:class:`pendulum_lqg.model.plant.Plant`,
+    whose :meth:`~pendulum_lqg.model.plant.Plant.linear_model` calls :func:`linearize`: a
+    structural type, so this module does not import the one that imports it)."""
+
+    @property
+    def model(self) -> mujoco.MjModel: ...
+    @property
+    def qpos_index(self) -> np.ndarray: ...
+    @property
+    def qvel_index(self) -> np.ndarray: ...
+    @property
+    def sensor_index(self) -> np.ndarray: ...
+    @property
+    def gravity(self) -> float: ...
+    @property
+    def cart_mass(self) -> float: ...
+    @property
+    def pole_mass(self) -> float: ...
+    @property
+    def pole_com(self) -> float: ...
+    @property
+    def pole_inertia_com(self) -> float: ...
 
 #: Finite-difference step for states and inputs (central differences: error O(eps²)).
 FD_EPS = 1e-6
@@ -62,7 +88,7 @@ class DiscreteModel:
         return structure(self.Phi, self.Gamma, self.C, discrete=True)
 
 
-def _equilibrium(plant: Plant) -> mujoco.MjData:
+def _equilibrium(plant: CartPoleModel) -> mujoco.MjData:
     data = mujoco.MjData(plant.model)
     mujoco.mj_resetData(plant.model, data)
     data.qpos[:] = 0.0
@@ -71,7 +97,7 @@ def _equilibrium(plant: Plant) -> mujoco.MjData:
     return data
 
 
-def _dynamics(plant: Plant, data: mujoco.MjData, x: np.ndarray, u: float, f: np.ndarray,
+def _dynamics(plant: CartPoleModel, data: mujoco.MjData, x: np.ndarray, u: float, f: np.ndarray,
               ) -> tuple[np.ndarray, np.ndarray]:
     """``(ẋ, y)`` at state x, force u and generalised forces f, from MuJoCo's forward dynamics."""
     m = plant.model
@@ -85,7 +111,7 @@ def _dynamics(plant: Plant, data: mujoco.MjData, x: np.ndarray, u: float, f: np.
     return xdot, data.sensordata[plant.sensor_index].copy()
 
 
-def linearize(plant: Plant, *, eps: float = FD_EPS) -> ContinuousModel:
+def linearize(plant: CartPoleModel, *, eps: float = FD_EPS) -> ContinuousModel:
     """Continuous linearisation about ``x = 0, u = 0`` by central differences of ``mj_forward``.
 
     The actuator must be unsaturated at the equilibrium (ctrl = 0 lies inside ``ctrlrange``), so
@@ -124,7 +150,7 @@ def discretize_zoh(model: ContinuousModel, dt: float) -> DiscreteModel:
     return DiscreteModel(Phi=Phi, Gamma=Gamma, C=model.C, dt=float(dt), method="zoh")
 
 
-def discretize_transition(plant: Plant, dt: float, *, eps: float = FD_EPS) -> DiscreteModel:
+def discretize_transition(plant: CartPoleModel, dt: float, *, eps: float = FD_EPS) -> DiscreteModel:
     """``(Φ, Γ)`` by composing MuJoCo's one-step ``mjd_transitionFD`` over one control period.
 
     With ``k`` physics steps per period and one-step Jacobians ``(A_h, B_h)``:
@@ -149,7 +175,7 @@ def discretize_transition(plant: Plant, dt: float, *, eps: float = FD_EPS) -> Di
                          method="mjd_transitionFD")
 
 
-def analytic_linearization(plant: Plant) -> ContinuousModel:
+def analytic_linearization(plant: CartPoleModel) -> ContinuousModel:
     r"""Rigid-body cart-pole linearised at the upright, from the model's own parameters.
 
     Generalised coordinates ``q = [p, θ]``; mass matrix at θ = 0

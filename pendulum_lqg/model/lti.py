@@ -46,16 +46,19 @@ Files are read through :mod:`pendulum_lqg.boundary` (regular files only, at most
 
 from __future__ import annotations
 
+import hashlib
 import io
 import math
 import zipfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from pendulum_lqg.boundary.fields import Invalid, Where, any_text
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.model.interface import Layout, LinearModel
 
 #: The keys of an LTI plant file.
 LTI_KEYS = ("name", "description", "control_period", "A", "B", "C", "G", "Phi", "Gamma",
@@ -77,7 +80,8 @@ _TEXT_KEYS = ("name", "description", "states", "inputs", "outputs", "observer_po
 
 @dataclass(frozen=True, eq=False)
 class LTIPlant:
-    """A linear plant from matrices (module docstring); validated when made.
+    """A linear plant from matrices (module docstring); validated when made; a
+    :class:`~pendulum_lqg.model.interface.SimulatedPlant`.
 
     Attributes
     ----------
@@ -116,9 +120,9 @@ class LTIPlant:
     inputs: tuple[str, ...] = ()
     input_limits: np.ndarray | None = None
 
-    #: What the simulation core asks a plant (:func:`pendulum_lqg.core.layout.layout`): an LTI
-    #: plant is stepped by its own (Φ, Γ) once per control period (no MuJoCo model, no track).
-    is_lti = True
+    #: What the simulation core asks a plant (:mod:`pendulum_lqg.model.interface`): an LTI plant
+    #: is stepped by its own (Φ, Γ) once per control period (no MuJoCo model, no track).
+    simulators = ("linear-zoh",)
     model = None
     track_limit = math.inf
 
@@ -187,6 +191,55 @@ class LTIPlant:
         if self.A is None or self.W_per_period:
             return self.G @ self.W @ self.G.T
         return design.process_noise_covariance(self.A, self.G, self.W, self.control_period)
+
+    # ---- the plant interface (pendulum_lqg.model.interface) ---------------------------------
+    def layout(self, scenario: Any) -> Layout:
+        """Its vectors (:mod:`pendulum_lqg.model.lti_layout`)."""
+        from pendulum_lqg.model.lti_layout import lti_layout
+
+        return lti_layout(self, scenario)
+
+    def limits(self, scenario: Any) -> tuple[float, float, Any]:
+        """No pole and no track (``inf``): its own ``state_limits`` are the failure rule; the
+        file's input limits unless the scenario sets ``force_limit``."""
+        return (math.inf, math.inf,
+                self.u_max if scenario.force_limit is None else scenario.force_limit)
+
+    def linear_model(self) -> LinearModel:
+        """``(A, B, C, 0)``; a plant given in discrete time has none (one line naming ``A``)."""
+        if self.A is None or self.B is None:
+            raise ConfigError(f"A: the LTI plant {self.name!r} is given in discrete time (Phi, "
+                              "Gamma); it has no continuous model")
+        return LinearModel(self.A, self.B, self.C, np.zeros((self.n_outputs, self.n_inputs)))
+
+    def sampled(self, period: float, kind: str = "linear-zoh") -> tuple[np.ndarray, np.ndarray]:
+        """``(Φ, Γ)`` at ``period``: its own at its control period, else from ``(A, B)``."""
+        from pendulum_lqg import design
+
+        if kind == "linear-zoh" and period == self.control_period:
+            return self.Phi, self.Gamma
+        lin = self.linear_model()
+        if kind == "linear-zoh":
+            return design.zoh(lin.A, lin.B, period)
+        if kind == "linear-euler":
+            return design.euler(lin.A, lin.B, period)
+        raise ConfigError(f"plant: expected 'linear-zoh' or 'linear-euler', got {kind!r}")
+
+    def fingerprint(self) -> str:
+        """SHA-256 of its name, period, matrices, limits and initial state (not the file's path
+        or description: the same plant read from a copy has the same fingerprint)."""
+        digest = hashlib.sha256()
+        for f in fields(self):
+            if f.name in ("path", "description"):
+                continue
+            value = getattr(self, f.name)
+            digest.update(f.name.encode())
+            if isinstance(value, np.ndarray):
+                digest.update(repr(value.shape).encode() + np.ascontiguousarray(
+                    value, dtype=float).tobytes())
+            else:
+                digest.update(repr(value).encode())
+        return digest.hexdigest()
 
 
 # ---- the schema: one value at a time --------------------------------------------------------------

@@ -11,6 +11,8 @@ horizontal force on the cart in newtons; measurement ``y = [p, θ]``.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -20,9 +22,10 @@ import mujoco
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.model.interface import Layout, LinearModel
+from pendulum_lqg.model.interface import steps_per_period as steps_per_period  # its old home
 from pendulum_lqg.problem.declare import positive_number
 from pendulum_lqg.problem.errors import check_keys
-from pendulum_lqg.util.limits import MAX_STEPS_PER_PERIOD, check_control_period
 
 STATE_NAMES: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")
 OUTPUT_NAMES: tuple[str, ...] = ("p", "theta")
@@ -31,6 +34,12 @@ OUTPUT_NAMES: tuple[str, ...] = ("p", "theta")
 SLIDER, HINGE, ACTUATOR = "slider", "hinge", "force"
 CART_BODY, POLE_BODY, CART_GEOM, POLE_GEOM, POLE_TIP = "cart", "pole", "cart", "pole", "pole_tip"
 SENSORS = ("cart_position", "pole_angle")
+
+#: The cart-pole's layout (with the default scenario's initial state and weights): metrics of p
+#: and θ (θ's columns first), the settling time of θ, ``y = [p, θ]``.
+CARTPOLE = Layout(states=STATE_NAMES, outputs=OUTPUT_NAMES, x0=np.array([0.0, 0.1, 0.0, 0.0]),
+                  x0_std=np.zeros(4), C=None, cost_Q=(1.0,) * 4, cost_R=1.0, state_limits=None,
+                  covariances=None, reported=2, order=(1, 0), settle=1)
 
 
 def default_model_path() -> Path:
@@ -230,7 +239,8 @@ def load_plant(path: str | Path | None = None, *, overrides: ModelOverrides | No
 
 @dataclass(frozen=True, eq=False)
 class Plant:
-    """A compiled cart-pole model with named read-outs.
+    """A compiled cart-pole model with named read-outs; a
+    :class:`~pendulum_lqg.model.interface.SimulatedPlant`.
 
     Use :func:`load_plant` to make one. The attributes below are read from the model, never set.
     """
@@ -238,6 +248,9 @@ class Plant:
     model: mujoco.MjModel
     path: Path
     overrides: ModelOverrides
+
+    #: MuJoCo itself, or its linearisation stepped in numpy (``Scenario.plant``).
+    simulators = ("mujoco", "linear-zoh", "linear-euler")
 
     def __post_init__(self) -> None:
         m = self.model
@@ -431,23 +444,50 @@ class Plant:
         _, qpos_cols, qvel_cols = self.physics_state_layout
         return np.concatenate([qpos_cols, qvel_cols])
 
+    # ---- the plant interface (pendulum_lqg.model.interface) ---------------------------------
+    def layout(self, scenario: Any) -> Layout:
+        """The cart-pole's vectors with the scenario's initial state and cost weights."""
+        return dataclasses.replace(CARTPOLE, x0=np.asarray(scenario.x0),
+                                   x0_std=np.asarray(scenario.x0_std), cost_Q=scenario.cost_Q,
+                                   cost_R=scenario.cost_R)
 
-def steps_per_period(plant: Plant, dt: float) -> int:
-    """Number of physics steps in one control period (with the plant, not the linearisation: the
-    simulation core imports no design code).
+    def limits(self, scenario: Any) -> tuple[float, float, float]:
+        """``(theta_max, track_limit, u_max)``: the rule of
+        :func:`pendulum_lqg.core.rules.limits` for the cart-pole (the scenario's limits, else the
+        slider ``range`` and the actuator ``ctrlrange``; on MuJoCo no wider than those)."""
+        track = self.track_limit if scenario.track_limit is None else scenario.track_limit
+        u_max = self.u_max if scenario.force_limit is None else scenario.force_limit
+        if scenario.plant == "mujoco":
+            for name, value, model, where in (
+                    ("track_limit", track, self.track_limit, "slider range"),
+                    ("force_limit", u_max, self.u_max, "actuator ctrlrange (model override "
+                                                       "force_limit)")):
+                if value > model:
+                    raise ConfigError(f"{name}: {value:g} is beyond the MuJoCo model's {where} "
+                                      f"±{model:g}; use a linear plant (plant = 'linear-zoh' or "
+                                      f"'linear-euler') or a model with a wider one")
+        return scenario.theta_max, track, u_max
 
-    ``dt`` must be a whole number k of physics steps h with ``1 ≤ k ≤``
-    :data:`MAX_STEPS_PER_PERIOD` and ``dt`` within the bounds of
-    :func:`~pendulum_lqg.util.limits.check_control_period`; otherwise a one-line :class:`ConfigError`
-    naming ``control_period``.
-    """
-    dt = check_control_period(dt)
-    h = plant.timestep
-    k = round(dt / h)
-    if k < 1 or abs(k * h - dt) > 1e-9 * max(dt, h):
-        raise ConfigError(f"control_period: {dt!r} s is not a positive integer multiple of the "
-                          f"physics step {h!r} s")
-    if k > MAX_STEPS_PER_PERIOD:
-        raise ConfigError(f"control_period: expected at most {MAX_STEPS_PER_PERIOD} physics "
-                          f"steps of {h!r} s (the ceiling), got {dt!r} s = {k} steps")
-    return int(k)
+    def linear_model(self) -> LinearModel:
+        """:func:`~pendulum_lqg.model.linearize.linearize`'s ``(A, B, C, D)`` about the upright."""
+        from pendulum_lqg.model.linearize import linearize
+
+        lin = linearize(self)
+        return LinearModel(lin.A, lin.B, lin.C, lin.D)
+
+    def sampled(self, period: float, kind: str = "linear-zoh") -> tuple[np.ndarray, np.ndarray]:
+        """``(Φ, Γ)`` of the linearisation at ``period``: exact ZOH or forward Euler."""
+        from pendulum_lqg.design import euler, zoh
+
+        lin = self.linear_model()
+        if kind == "linear-zoh":
+            return zoh(lin.A, lin.B, period)
+        if kind == "linear-euler":
+            return euler(lin.A, lin.B, period)          # I + TA, TB
+        raise ConfigError(f"plant: expected 'linear-zoh' or 'linear-euler', got {kind!r}")
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the MJCF file's bytes and the overrides applied to it."""
+        text = json.dumps({"mjcf": hashlib.sha256(self.path.read_bytes()).hexdigest(),
+                           "overrides": dataclasses.asdict(self.overrides)}, sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()

@@ -103,12 +103,9 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
     sampled slower than the loop's ceiling of the control period)."""
     from pendulum_lqg.core.noise import NoiseModel
     from pendulum_lqg.core.scenario import check_burn_in
-    from pendulum_lqg.policies.theory import (
-        StationaryProblem,
-        episode_start,
-        linear_estimator,
-        stationary,
-    )
+    from pendulum_lqg.policies.closed_loop import StationaryProblem, linear_estimator
+    from pendulum_lqg.policies.episode_theory import episode_start
+    from pendulum_lqg.policies.theory import stationary
     from pendulum_lqg.problem.declare import positive_number
 
     s = NoiseModel(scale=noise_scale).scale
@@ -126,7 +123,8 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
                                  h=plant.control_period, C=plant.C, K=policy.K,
                                  estimator=linear_estimator(policy),
                                  Wd=plant.process_covariance() * s2, V=plant.V * s2,
-                                 Q=plant.Q, R=plant.R)
+                                 Q=plant.Q, R=plant.R, N=plant.cross_weight,
+                                 inputs=tuple(plant.input_names))
         out[name] = stationary(prob, name=name, duration=duration,
                                limits={"force_limit": plant.force_limit},
                                state_names=plant.state_names,

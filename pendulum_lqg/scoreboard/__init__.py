@@ -5,6 +5,7 @@ module            concept
 ================  ================================================================================
 ``suites``        :class:`~pendulum_lqg.scoreboard.suites.Suite`: a named, versioned challenge level
                   (``experiments/suites/*.toml``) with its reference policy
+``lti_suite``     a suite of a plant given as matrices (``score POLICY --suite FILE``)
 ``episodes``      playing a suite: a policy through the batch, a Gymnasium agent through the env
 ``score``         success rate, mean J and the optimality gap to the reference; the score file
 ``board``         a folder of score files as one Markdown table

@@ -45,7 +45,7 @@ from pendulum_lqg.scoreboard.stats import failure_aware_figures
 from pendulum_lqg.scoreboard.suites import Suite
 
 __all__ = ["SCORE_VERSION", "optimality_gap", "score_document", "score_entry", "success_figures",
-           "suite_score"]
+           "suite_figures", "suite_score"]
 #: Paired bootstrap resamples of the gap's interval, and their seed.
 BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED = 2000, 0
 #: The full-state LQR whose figures bound what observation costs.
@@ -85,18 +85,26 @@ def suite_score(suite: Suite, rows: Sequence[dict[str, Any]], reference: Sequenc
     """One suite's entry of a score file (see :func:`score_document`)."""
     if [r["episode"] for r in rows] != list(range(suite.episodes)):
         raise ValueError(f"suite {suite.name!r}: the rows are not episodes 0 … {suite.episodes - 1}")
-    out = {**success_figures(rows), **optimality_gap(rows, reference),
-           **failure_aware_figures(rows, reference)}
-    ref = success_figures(reference)
-    out["reference"] = {"policy": suite.reference, "success_rate": ref["success_rate"],
-                        "cost_mean": ref["cost_mean"]}
-    full = success_figures(bound)
-    out["full_state_bound"] = {"policy": FULL_STATE_POLICY, "success_rate": full["success_rate"],
-                               "cost_mean": full["cost_mean"]}
+    out = suite_figures(rows, reference, bound, reference_policy=suite.reference)
     out["version"] = suite.version
     out["fingerprint"] = suite.fingerprint()
     out["designed_on"] = suite.designed_on
     out["rows"] = [dict(r) for r in rows]
+    return out
+
+
+def suite_figures(rows: Sequence[dict[str, Any]], reference: Sequence[dict[str, Any]],
+                  bound: Sequence[dict[str, Any]], *, reference_policy: str) -> dict[str, Any]:
+    """The figures of one suite's entry (success, J, gap, failure-aware score) and those of its
+    ``reference`` and full-state ``bound``, for any suite (cart-pole or LTI)."""
+    out = {**success_figures(rows), **optimality_gap(rows, reference),
+           **failure_aware_figures(rows, reference)}
+    ref = success_figures(reference)
+    out["reference"] = {"policy": reference_policy, "success_rate": ref["success_rate"],
+                        "cost_mean": ref["cost_mean"]}
+    full = success_figures(bound)
+    out["full_state_bound"] = {"policy": FULL_STATE_POLICY, "success_rate": full["success_rate"],
+                               "cost_mean": full["cost_mean"]}
     return out
 
 

@@ -192,3 +192,18 @@ def test_theory_lti_takes_a_plant_sampled_slower_than_the_loops_ceiling(tmp_path
     entry = json.loads(capsys.readouterr().out)["policies"]["dlqr+kalman"]
     assert entry["stable"] and entry["episode"]["periods"] == 50
     assert entry["episode"]["rms"]["x1"] > entry["rms"]["x1"]      # the start at x₀ = 2
+
+
+def test_two_inputs_have_their_own_spread_in_theory_and_run(capsys):
+    """Several inputs: theory --json gives u_std_by_input and episode.u_rms_by_input by the file's
+    names, run prints each input in its theory lines and keeps them in --json; the cart-pole's
+    theory has neither key."""
+    assert main(["theory", "--lti", "experiments/lti/two_mass.toml", "dlqr+kalman", "--json"]) == 0
+    ka = json.loads(capsys.readouterr().out)["policies"]["dlqr+kalman"]
+    assert set(ka["u_std_by_input"]) == set(ka["episode"]["u_rms_by_input"]) == {"f1", "f2"}
+    assert ka["u_std"] == ka["u_std_by_input"]["f1"]
+    assert main(["run", "--lti", "experiments/lti/two_mass.toml", "--episodes", "2"]) == 0
+    lines = [x for x in capsys.readouterr().out.splitlines() if x.startswith("theory")]
+    assert all(" f1 " in x and " f2 " in x for x in lines) and len(lines) == 2
+    assert main(["theory", "dlqr+kalman", "--json"]) == 0
+    assert "by_input" not in capsys.readouterr().out

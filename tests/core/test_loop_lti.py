@@ -158,9 +158,36 @@ def test_lti_plant_refuses_what_its_loop_cannot_run(double_integrator):
     with pytest.raises(ConfigError, match="plant: an LTI plant runs"):
         Simulator(plant, Scenario(control_period=0.01, plant="linear-euler"))
     two = load_lti(EXPERIMENTS / "two_mass.toml")
-    with pytest.raises(ConfigError, match="actuator_delay: the actuator's delay line and lag "
-                                          "take one input; 'two_mass' has 2"):
-        Simulator(two, Scenario(control_period=0.02, plant="linear-zoh", actuator_delay=0.02))
+    with pytest.raises(ConfigError, match="actuator_tau: "):
+        Simulator(two, Scenario(control_period=0.02, plant="linear-zoh", actuator_tau=0.05))
+
+
+def test_two_input_actuator_delay_holds_each_input_back():
+    """Actuator delay on a plant of two inputs: the delay line holds (n, d, m); noise-free under
+    dlqr+none the command reaching the plant in period k is −K x_{k−2} (0 for the first two
+    periods), both inputs, the plant follows x ← Φ x + Γ u exactly, the trajectory keeps the
+    requested −K x_k and each input's RMS is the command's."""
+    plant = load_lti(EXPERIMENTS / "two_mass.toml")
+    sc = _scenario(plant, 1.0, noise=_quiet(), actuator_delay=0.04)
+    policy = design_lti_policy(plant, "dlqr+none")
+    with Simulator(plant, sc, streamed_metrics=False) as sim:
+        assert sim.sensing.act_delay == 2
+    res = run_episodes(plant, sc, policy, seed=1, episodes=[0], trajectory=True)
+    tr, row = res.trajectories[0], res.rows[0]
+    x, queue, xs, requested, applied = plant.x0, [np.zeros(2), np.zeros(2)], [], [], []
+    for _ in range(50):
+        xs.append(x)
+        requested.append(-policy.K @ x)
+        queue.append(requested[-1])
+        applied.append(queue.pop(0))
+        x = plant.Phi @ x + plant.Gamma @ applied[-1]
+    applied = np.array(applied)
+    np.testing.assert_allclose(tr.x, np.array(xs), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(tr.u, np.array(requested), rtol=0, atol=1e-14)
+    assert np.all(applied[:2] == 0.0) and np.all(applied[2:] != 0.0)
+    for j, name in enumerate(plant.input_names):
+        assert row[f"rms_{name}"] == pytest.approx(np.sqrt(np.mean(applied[:, j] ** 2)),
+                                                   rel=1e-12)
 
 
 def test_two_input_plant_follows_its_closed_loop_and_full_cost_exactly():

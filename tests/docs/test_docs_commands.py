@@ -118,6 +118,9 @@ REDUCED: dict[str, tuple[str, str]] = {
     "uv run pendulum-lqg score dlqr+kalman --suite lecture --suite lossy --out scores/dlqr+kalman.json":
         ("pendulum-lqg score dlqr+kalman --suite lecture --suite lossy --episodes 2 "
          "--out scores/dlqr+kalman.json", "100 episodes per suite: 2"),
+    "uv run pendulum-lqg score dlqr+luenberger --suite experiments/lti/two_mass_suite.toml":
+        ("pendulum-lqg score dlqr+luenberger --suite experiments/lti/two_mass_suite.toml "
+         "--episodes 4", "100 episodes of the LTI suite: 4"),
     "uv run pendulum-lqg perf --repeats 3":
         ("pendulum-lqg perf --repeats 1 --episodes 8 --duration 1", _TIMING),
     "uv run python benchmarks/env_benchmark.py --repeats 5":

@@ -71,16 +71,16 @@ def test_a_long_run_reports_progress_and_batching_changes_nothing(capsys, monkey
 
 def test_a_huge_grid_is_refused_before_validating_and_a_grid_compiles_its_model_once(
         tmp_path, capsys):
-    from pendulum_lqg.bench import experiments
+    from pendulum_lqg.bench import experiments, sources
 
     values = ", ".join(str(i / 1000) for i in range(1000))
     durations = ", ".join(str(1 + i / 1000) for i in range(1000))
     spec = tmp_path / "huge.toml"
     spec.write_text(f'name = "huge"\n[grid]\nnoise_scale = [{values}]\nduration = [{durations}]\n')
     _one_line_exit_2(capsys, ["bench", str(spec)], "grid: at most 100,000 (configurations")
-    experiments._simulated_plant.cache_clear()
+    sources.simulated_plant.cache_clear()
     spec.write_text(f'name = "wide"\n[grid]\nnoise_scale = [{values}]\n')
     loaded = experiments.load_spec(str(spec))
     assert len(loaded.configurations) == 1000
-    assert experiments._simulated_plant.cache_info().misses == 1      # one compile, not 1000
+    assert sources.simulated_plant.cache_info().misses == 1      # one compile, not 1000
     assert loaded.with_overrides() is loaded                           # no second validation

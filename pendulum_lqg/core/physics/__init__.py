@@ -45,7 +45,11 @@ BACKENDS: tuple[str, ...] = ("rollout", "step")
 def make_physics(plant: Plant, *, plant_kind: str, backend: str, capacity: int, nthread: int,
                  k: int) -> Physics:
     """The backend for a scenario's ``plant`` (``"mujoco"`` or a linear kind) and a MuJoCo
-    ``backend``, with room for ``capacity`` rows and ``nthread`` physics threads."""
+    ``backend``, with room for ``capacity`` rows and ``nthread`` physics threads; a kind the
+    plant cannot be stepped by (not in its ``simulators``) is refused, one line naming ``plant``."""
+    if plant_kind not in plant.simulators:
+        raise ConfigError(f"plant: expected one of {', '.join(plant.simulators)} for this plant, "
+                          f"got {plant_kind!r}")
     if plant_kind != "mujoco":
         return LinearPhysics(plant, plant_kind, k)
     if backend == "rollout":

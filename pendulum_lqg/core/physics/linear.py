@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -12,7 +12,7 @@ if TYPE_CHECKING:
     import mujoco
 
     from pendulum_lqg.core.period import PeriodView
-    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.model.interface import SimulatedPlant
 
 
 class LinearPhysics:
@@ -24,31 +24,22 @@ class LinearPhysics:
     the failure rule and the cost integrate over) lie on the straight line to it, the last one
     exactly on it. State noise is added at the end of the period by the loop, as for MuJoCo; a
     linear plant has no force noise, no actuator lag and no randomised models (the scenario refuses
-    them). An LTI plant given as matrices (:mod:`pendulum_lqg.model.lti`) is stepped by its own exact
-    sampled model ``x ← Φ x + Γ u``, once per control period (its physics step is T).
+    them). The plant gives ``(Φ, Γ)`` (:meth:`SimulatedPlant.sampled
+    <pendulum_lqg.model.interface.SimulatedPlant.sampled>`): an LTI plant given as matrices
+    (:mod:`pendulum_lqg.model.lti`) is stepped by its own exact sampled model ``x ← Φ x + Γ u``,
+    once per control period (its physics step is T).
     """
 
-    def __init__(self, plant: Plant, kind: str, k: int) -> None:
-        from pendulum_lqg.design import euler, zoh
-        from pendulum_lqg.model.linearize import linearize
-
+    def __init__(self, plant: SimulatedPlant, kind: str, k: int) -> None:
         self.kind, self.k = kind, k
         self._frac = (np.arange(1, k + 1) / k)[None, :, None]
-        if getattr(plant, "is_lti", False):        # an LTIPlant: its own (Φ, Γ) at T, k = 1
-            lti: Any = plant                       # (pendulum_lqg.model.lti imports the core)
-            self.Phi, self.Gamma = lti.Phi, lti.Gamma[:, 0]
-            if lti.Gamma.shape[1] > 1:             # m inputs: u (n, m) enters as Γ u
-                self.Gamma = lti.Gamma
-            return
-        lin = linearize(plant)
-        h = plant.timestep
-        if kind == "linear-zoh":
-            self.Phi, Gamma = zoh(lin.A, lin.B, h)
-        elif kind == "linear-euler":
-            self.Phi, Gamma = euler(lin.A, lin.B, k * h)       # I + TA, TB
-        else:
+        if kind not in ("linear-zoh", "linear-euler"):
             raise ConfigError(f"plant: expected 'linear-zoh' or 'linear-euler', got {kind!r}")
-        self.Gamma = Gamma[:, 0]
+        # the exact ZOH at every physics step h, or Euler over the whole period k·h
+        period = plant.timestep if kind == "linear-zoh" else k * plant.timestep
+        self.Phi, Gamma = plant.sampled(period, kind)
+        # one input: Γ (n,), u (rows,) enters as u·Γ; m inputs (an LTI plant, k = 1): Γ u
+        self.Gamma = Gamma[:, 0] if Gamma.shape[1] == 1 else Gamma
 
     def set_models(self, models: list[mujoco.MjModel]) -> None:
         raise ConfigError("randomize: per-episode models need plant = 'mujoco'")
