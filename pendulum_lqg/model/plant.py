@@ -24,7 +24,8 @@ import numpy as np
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.interface import Layout, LinearModel
 from pendulum_lqg.model.interface import steps_per_period as steps_per_period  # its old home
-from pendulum_lqg.util.config import check_keys, positive_number
+from pendulum_lqg.problem.declare import positive_number
+from pendulum_lqg.problem.errors import check_keys
 
 STATE_NAMES: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")
 OUTPUT_NAMES: tuple[str, ...] = ("p", "theta")

@@ -106,7 +106,7 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
     from pendulum_lqg.policies.closed_loop import StationaryProblem, linear_estimator
     from pendulum_lqg.policies.episode_theory import episode_start
     from pendulum_lqg.policies.theory import stationary
-    from pendulum_lqg.util.config import positive_number
+    from pendulum_lqg.problem.declare import positive_number
 
     s = NoiseModel(scale=noise_scale).scale
     duration = positive_number("duration", duration)
