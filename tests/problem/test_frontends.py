@@ -68,3 +68,39 @@ def test_a_flag_is_checked_by_its_declaration(capsys, argv, message):
 def test_flags_read_their_declared_types():
     args = build_parser().parse_args(["run", "--theta-max", "inf", "--dropout", "0.25"])
     assert args.theta_max == float("inf") and args.dropout == 0.25
+
+
+def _docstring_arguments() -> dict[str, str]:
+    """The env docstring's Arguments table (what ``help(env)`` shows): keyword → default cell."""
+    doc = CartPoleLQGEnv.__doc__ or ""
+    table = doc[doc.index("## Arguments"):].split("\n\n")[1]
+    rows: dict[str, str] = {}
+    for line in table.splitlines()[2:]:                       # after the header and its rule
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        names, default = cells[0], cells[2]
+        for name in names.split(","):
+            rows[name.strip().strip("`")] = default
+    return rows
+
+
+def test_the_env_docstring_table_lists_every_declared_keyword_with_its_default():
+    """The docstring's table is written by hand (it carries footnotes a generated table cannot):
+    it must name every declared keyword, and a default it writes as one literal must be the
+    declaration's."""
+    import ast
+
+    rows = _docstring_arguments()
+    declared_names = [d.name for d in env_keywords()]
+    assert not set(declared_names) - set(rows), "declared keywords missing from the docstring"
+    checked = 0
+    for d in env_keywords():
+        cell = rows[d.name]
+        literal = cell.split()[0]
+        if not (literal.startswith("`") and literal.endswith("`")) or "," in cell:
+            continue                                 # "see above", "bundled XML", a pair …
+        value = ast.literal_eval(literal.strip("`"))
+        if isinstance(d.default, tuple) or (d.default is None and value is not None):
+            continue                                 # a vector, or a default derived from others
+        assert value == d.default, f"{d.name}: docstring {cell!r}, declared {d.default!r}"
+        checked += 1
+    assert checked >= 12, checked
