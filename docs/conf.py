@@ -36,7 +36,7 @@ extensions = [
 source_suffix = {".md": "myst-nb"}     # a page is a notebook when its front matter says so
 root_doc = "index"
 # leaderboard/: the score files and the generated board, included by leaderboard.md
-exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "leaderboard"]
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "leaderboard", "_generated"]
 
 # MyST: $…$ / $$…$$ maths, amsmath environments, ::: fences; anchors for every heading down to ###
 # so that links such as [text](gymnasium.md#the-reward) are checked by the build.

@@ -56,7 +56,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 from pendulum_lqg.bench.sources import PlantSource, choose_source
 from pendulum_lqg.bench.study_params import parse_study_params
@@ -66,7 +66,9 @@ from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.model.plant import ModelOverrides, Plant
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS
 from pendulum_lqg.policies.spec import DesignSpec
-from pendulum_lqg.util.config import check_keys
+from pendulum_lqg.problem.declare import check
+from pendulum_lqg.problem.errors import check_keys
+from pendulum_lqg.problem.experiment import RUN_SETTINGS, SCENARIO_GRID_KEYS, SCENARIO_KEYS
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
@@ -77,16 +79,11 @@ TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "model_file", "s
 #: its parameters; the grid still defines the configurations the study runs on
 #: (see :mod:`pendulum_lqg.analysis.studies`).
 STUDIES = ("margins", "roa")
-GRID_KEYS = ("policy", "controller", "observer", "noise_scale", "control_period", "duration",
-             "theta0", "estimate0", "discretization", "pole_mass_scale", "pole_length_scale",
-             "cart_mass_scale", "measurement_delay", "actuator_delay", "dropout", "actuator_tau",
-             "delay", "delay_kind", "plant")
-#: Scenario fields of the sensing-and-actuation study (also grid keys).
-SENSING_KEYS = ("measurement_delay", "actuator_delay", "dropout", "actuator_tau")
+#: The grid's keys: the scenario's are declared (problem/scenario.py, ``grid=True``).
+GRID_KEYS = ("policy", "controller", "observer", "noise_scale", *SCENARIO_GRID_KEYS, "theta0",
+             "discretization", "pole_mass_scale", "pole_length_scale", "cart_mass_scale", "delay",
+             "delay_kind")
 DELAY_KINDS = ("measurement", "actuator")
-SCENARIO_KEYS = ("control_period", "duration", "x0", "x0_std", "estimate0", "theta_max",
-                 "track_limit", "force_limit", "settle_band", "cost_Q", "cost_R", *SENSING_KEYS,
-                 "randomize", "plant", "burn_in")
 NOISE_KEYS = tuple(f.name for f in dataclasses.fields(NoiseModel))
 DESIGN_KEYS = tuple(f.name for f in dataclasses.fields(DesignSpec))
 MODEL_KEYS = tuple(f.name for f in dataclasses.fields(ModelOverrides))
@@ -282,12 +279,6 @@ def check_rows(episodes: int, configurations: int) -> None:
                   "the summary holds every row of the experiment in memory")
 
 
-def _as_int(where: str, value: object, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ConfigError(f"{where}: expected an integer ≥ {minimum}, got {value!r}")
-    return value
-
-
 def _grid_point(values: dict[str, Any], base: dict[str, dict[str, Any]],
                 base_dir: Path | None = None,
                 ) -> tuple[dict[str, dict[str, Any]], str | None]:
@@ -313,15 +304,12 @@ def _grid_point(values: dict[str, Any], base: dict[str, dict[str, Any]],
             tables["design"][key] = value
         elif key == "noise_scale":
             tables["noise"]["scale"] = value
-        elif key in ("control_period", "duration", "estimate0", "plant", *SENSING_KEYS):
+        elif key in SCENARIO_GRID_KEYS:
             tables["scenario"][key] = value
         elif key == "delay_kind":
             continue                                     # with ``delay`` below
         elif key == "delay":
-            kind = values["delay_kind"]
-            if kind not in DELAY_KINDS:
-                raise ConfigError(f"grid.delay_kind: expected 'measurement' or 'actuator', got "
-                                  f"{kind!r}")
+            kind = check("grid.delay_kind", values["delay_kind"], Literal[DELAY_KINDS])
             tables["scenario"][f"{kind}_delay"] = value
         elif key == "theta0":
             x0 = list(tables["scenario"].get("x0", defaults.X0))
@@ -382,10 +370,10 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     lti = lti_file(data.get("lti_file"), base_dir)
     if lti is not None:
         check_lti_experiment(data)
-    episodes = _as_int("episodes", data.get("episodes", 100), 1)
-    seed = _as_int("seed", data.get("seed", 0), 0)
-    chunk = check_at_most("chunk", _as_int("chunk", data.get("chunk", 250), 1),
-                          MAX_BATCH_EPISODES, "episodes per work unit, one batch of run_episodes")
+    episodes, seed, chunk = (check(d.name, data.get(d.name, d.default), d.type)
+                             for d in RUN_SETTINGS.values())
+    check_at_most("chunk", chunk, MAX_BATCH_EPISODES,
+                  "episodes per work unit, one batch of run_episodes")
     configs = _configurations(grid, base, episodes, base_dir, model_file=model_file, lti=lti)
     return ExperimentSpec(name=str(data.get("name", name)), description=str(
         data.get("description", "")), episodes=episodes, seed=seed, chunk=chunk,
@@ -403,8 +391,7 @@ def _checked_tables(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
     base = {table: dict(data.get(table, {}))
             for table in ("scenario", "noise", "design", "model")}
     for key in ("name", "description"):
-        if key in data and not isinstance(data[key], str):
-            raise ConfigError(f"{key}: expected a string, got {data[key]!r}")
+        check(key, data.get(key, ""), str)
     if "name" in data:
         check_name(str(data["name"]))
     return base

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.problem import defaults
 
 #: What an experiment on an LTI plant may set, per table (the file holds the rest).
 LTI_TABLE_KEYS: dict[str, tuple[str, ...]] = {
@@ -91,7 +92,7 @@ def lti_build(cfg: Any) -> tuple[Any, Any]:
     from pendulum_lqg.policies.lti import lti_scenario
 
     fields = dict(cfg.scenario)
-    scenario = lti_scenario(lti_plant(cfg.lti_file), noise_scale=cfg.noise.get("scale", 1.0),
+    scenario = lti_scenario(lti_plant(cfg.lti_file), noise_scale=cfg.noise.get("scale", defaults.NOISE_SCALE),
                             duration=fields.pop("duration", 10.0), **fields)
     return scenario, DesignSpec(**cfg.design)
 

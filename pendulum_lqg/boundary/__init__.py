@@ -5,8 +5,8 @@ module         concept
 =============  ================================================================================
 (this one)     reading: only regular files, at most :data:`~pendulum_lqg.util.limits.MAX_INPUT_BYTES`,
                UTF-8, JSON or TOML nested at most :data:`~pendulum_lqg.util.limits.MAX_NESTING` deep
-``fields``     the validators of one value (a string, an integer ≥ k, a finite number, a table…)
-               and :class:`~pendulum_lqg.boundary.fields.Where`, the file and key an error names
+``fields``     the kinds of one value (a string, an integer ≥ k, a finite number, a table…) as
+               msgspec types; :class:`~pendulum_lqg.problem.errors.Where` names file and key
 ``schemas``    one schema per external format: score files, stable-baselines3 training records
 =============  ================================================================================
 

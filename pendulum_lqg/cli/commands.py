@@ -8,7 +8,7 @@ import sys
 from typing import Any
 
 from pendulum_lqg.cli.parser import DEFAULT_RECORDING, cfg_error, jsonable, noise_from_args, spec_from_args
-from pendulum_lqg.cli.theory import limit_fields, run_theory_lines
+from pendulum_lqg.cli.theory import declared_fields, run_theory_lines
 
 
 # ---- run -----------------------------------------------------------------------------------------
@@ -18,14 +18,10 @@ def scenario_from_args(args: argparse.Namespace) -> Any:
     from pendulum_lqg.model.plant import Randomization
 
     noise = noise_from_args(args, scale=args.noise_scale)
-    return Scenario(control_period=args.dt, duration=args.duration, noise=noise,
-                    x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0,
+    return Scenario(control_period=args.dt, noise=noise, x0=(0.0, args.theta0, 0.0, 0.0),
                     plant=args.plant,
-                    measurement_delay=args.measurement_delay,
-                    actuator_delay=args.actuator_delay, dropout=args.dropout,
-                    actuator_tau=args.actuator_tau,
                     randomize=Randomization.from_mapping(_randomize(args.randomize)),
-                    burn_in=args.burn_in, **limit_fields(args))
+                    **declared_fields(args, "run"))
 
 
 def cmd_run(args: argparse.Namespace) -> int:

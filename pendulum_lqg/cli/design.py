@@ -158,9 +158,9 @@ def _design_lti(args: argparse.Namespace) -> int:
     import numpy as np
 
     from pendulum_lqg.cli.lti import CARTPOLE_OPTIONS, refuse_cartpole_options
-    from pendulum_lqg.core import defaults
     from pendulum_lqg.model.lti import load_lti
     from pendulum_lqg.policies.lti import design_lti_all
+    from pendulum_lqg.problem import defaults
 
     refuse_cartpole_options(args, {**CARTPOLE_OPTIONS,
                                    "dt": (defaults.CONTROL_PERIOD, "the file's control_period")})

@@ -12,7 +12,7 @@ from typing import Any, cast
 import numpy as np
 
 from pendulum_lqg.cli.parser import cfg_error, jsonable
-from pendulum_lqg.core import defaults
+from pendulum_lqg.problem import defaults
 
 #: Options that describe the cart-pole, shared by ``run``, ``theory`` and ``design``: with ``--lti``
 #: the file says them instead (their value when not given, and what the file holds in their place).

@@ -4,17 +4,15 @@ checks (exit 2), and the arguments turned into library objects."""
 from __future__ import annotations
 
 import argparse
-import math
 import re
 import sys
-from collections.abc import Callable
 from typing import Any, NoReturn
 
 from pendulum_lqg.cli.score import add_call_timeout
 from pendulum_lqg.cli.score import add_parsers as add_score_parsers
 from pendulum_lqg.cli.train import add_train_parser
-from pendulum_lqg.core import defaults
 from pendulum_lqg.names import CONTROLLERS, LECTURE_POLICIES, OBSERVERS, PLANTS
+from pendulum_lqg.problem import defaults
 from pendulum_lqg.version import __version__
 
 EXIT_USAGE = 2
@@ -43,119 +41,46 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
-def _floats(text: str) -> list[float]:
-    try:
-        vals = [float(t) for t in text.replace(" ", "").split(",") if t]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
-    if not vals or not all(math.isfinite(v) for v in vals):
-        raise argparse.ArgumentTypeError(f"expected finite comma-separated numbers, got {text!r}")
-    return vals
+def Kind(kind: str, *, each: bool = False) -> Any:
+    """:class:`pendulum_lqg.cli.options.Kind`, imported when a parser is built (``import
+    pendulum_lqg.cli`` loads neither the flags nor their checks)."""
+    from pendulum_lqg.cli.options import Kind as DeclaredKind
+
+    return DeclaredKind(kind, each=each)
 
 
-def _complexes(text: str) -> list[complex]:
-    try:
-        vals = [complex(t.replace("i", "j")) for t in text.replace(" ", "").split(",") if t]
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected comma-separated poles like -0.4,-0.5 or -1+2j,-1-2j, got {text!r}") from None
-    return vals
+def add_flags(p: argparse.ArgumentParser, command: str) -> None:
+    """The declared flags of ``command`` (:func:`pendulum_lqg.cli.options.add_flags`)."""
+    from pendulum_lqg.cli.options import add_flags as add_declared
 
-
-def _int_at_least(minimum: int) -> Callable[[str], int]:
-    """argparse type: an integer ≥ ``minimum``."""
-    what = "a positive integer" if minimum == 1 else "a non-negative integer"
-
-    def parse(text: str) -> int:
-        try:
-            v = int(text)
-        except ValueError:
-            v = minimum - 1
-        if v < minimum:
-            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
-        return v
-
-    return parse
-
-
-_positive_int, _nonneg_int = _int_at_least(1), _int_at_least(0)
-
-
-def _number(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
-    return v
-
-
-def _nonneg_number(text: str) -> float:
-    """argparse type: a finite number ≥ 0."""
-    v = _number(text)
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, got {text!r}")
-    return v
-
-
-def _positive_number(text: str) -> float:
-    """argparse type: a finite number > 0."""
-    v = _number(text)
-    if v <= 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return v
+    add_declared(p, command)
 
 
 def _add_design_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("design")
     g.add_argument("--model", default=None, metavar="XML",
                    help="MJCF model file (default: the bundled models/cartpole.xml)")
-    g.add_argument("--dt", type=_number, default=defaults.CONTROL_PERIOD, metavar="T",
+    g.add_argument("--dt", type=Kind("Finite"), default=defaults.CONTROL_PERIOD, metavar="T",
                    help="control period T in seconds, a whole number (≤ 10 000) of the model's "
                         f"physics steps and at most 1 s (default {defaults.CONTROL_PERIOD:g})")
-    g.add_argument("--q", type=_floats, default=None, metavar="Q1,..,Q4",
+    g.add_argument("--q", type=Kind("Finite", each=True), default=None, metavar="Q1,..,Q4",
                    help="diagonal of the LQR state weight Q, units of [m⁻², rad⁻², (m/s)⁻², "
                         "(rad/s)⁻²] (default 1,1,1,1)")
-    g.add_argument("--r", type=_number, default=None, help="LQR input weight R in N⁻² (default 1)")
-    g.add_argument("--observer-poles", type=_complexes, default=None, metavar="P1,..,P4",
+    g.add_argument("--r", type=Kind("Finite"), default=None, help="LQR input weight R in N⁻² (default 1)")
+    g.add_argument("--observer-poles", type=Kind("Complex", each=True), default=None, metavar="P1,..,P4",
                    help="continuous-time Luenberger poles in rad/s, e.g. --observer-poles "
                         "-2,-3,-4,-5 or -1+2j,-1-2j,-3,-4 (default -0.4,-0.5,-0.6,-0.7); "
                         "discrete designs use z = exp(s·T)")
-    g.add_argument("--w", type=_floats, default=None, metavar="W",
+    g.add_argument("--w", type=Kind("Finite", each=True), default=None, metavar="W",
                    help="process-noise spectral density, diagonal: 4 values (m²·s, rad²·s, …) "
                         "for state noise, 2 (N²·s, N²m²·s) for force noise (default the "
                         "lecture's 4e-4 on every state)")
-    g.add_argument("--v", type=_floats, default=None, metavar="V",
+    g.add_argument("--v", type=Kind("Finite", each=True), default=None, metavar="V",
                    help="measurement-noise covariance per sample, diagonal (m², rad²; default "
                         "0.01,0.01)")
     g.add_argument("--process-noise", choices=("state", "force"), default="state",
                    help="where process noise enters: the state (F = I₄, lecture) or generalised "
                         "forces on slider and hinge (default state)")
-
-
-def _limit(text: str) -> float:
-    """argparse type: a positive number of the limit's unit, or ``inf`` (no limit)."""
-    try:
-        v = float(text)
-    except ValueError:
-        v = -1.0
-    if not v > 0:                                    # also refuses nan
-        raise argparse.ArgumentTypeError(f"expected a positive number or inf, got {text!r}")
-    return v
-
-
-def add_limit_options(p: argparse.ArgumentParser) -> None:
-    """``--theta-max``, ``--track-limit``, ``--force-limit`` (``inf`` switches one off)."""
-    g = p.add_argument_group("limits (inf switches a limit off; core/rules.py applies them)")
-    g.add_argument("--theta-max", type=_limit, default=defaults.THETA_MAX, metavar="RAD",
-                   help=f"failure when |θ| exceeds this, in rad (default {defaults.THETA_MAX:g})")
-    g.add_argument("--track-limit", type=_limit, default=None, metavar="M",
-                   help="failure when |p| reaches this, in m (default: the MJCF slider range, "
-                        "±2.4 m; beyond it only on a linear plant)")
-    g.add_argument("--force-limit", type=_limit, default=None, metavar="N",
-                   help="saturation |u| ≤ this, in N (default: the MJCF ctrlrange, ±10 N; "
-                        "beyond it only on a linear plant)")
 
 
 def add_theory_parser(sub: Any) -> None:
@@ -179,31 +104,15 @@ def add_theory_parser(sub: Any) -> None:
                         "experiments/lti/double_integrator.toml) instead of the cart-pole; "
                         "policies dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
                         "dlqr+none, dlqr+kalman, dlqr+luenberger)")
-    p.add_argument("--noise-scale", type=_nonneg_number, default=1.0,
-                   help="multiplies both noises' standard deviations, at most 10¹² (default 1)")
-    p.add_argument("--duration", type=_positive_number, default=defaults.DURATION,
-                   help=f"episode length in s for the implied J and the episode's expected RMS "
-                        f"(default {defaults.DURATION:g})")
-    p.add_argument("--theta0", type=_number, default=defaults.X0[1],
+    add_flags(p, "theory")              # the declared settings (problem/), theory's front end
+    p.add_argument("--theta0", type=Kind("Finite"), default=defaults.X0[1],
                    help=f"initial pole angle in rad of the episode the expected RMS is taken over "
                         f"(default {defaults.X0[1]:g}, as run; not with --lti: the file's x0)")
-    p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
-                   help="initial estimate of that episode: x̂₀ = 0 or the true x₀ (default zero)")
-    add_burn_in_option(p)
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: policies.NAME.{spectral_radius, stable, std, "
                         "u_std, estimate_error_std, cost_rate, episode.{rms, u_rms, "
                         "estimate_error_rms, cost_J}, …}")
-    add_limit_options(p)
     _add_design_options(p)
-
-
-def add_burn_in_option(p: argparse.ArgumentParser) -> None:
-    """``--burn-in SECONDS``: the start of each episode left out of the RMS metrics."""
-    p.add_argument("--burn-in", type=_nonneg_number, default=0.0, metavar="SECONDS",
-                   help="leave the first SECONDS of each episode (whole control periods) out of "
-                        "the RMS metrics and of the theory's expected RMS; J, maxima and "
-                        "settling time keep the whole episode (default 0)")
 
 
 def _add_design_parser(sub: Any) -> None:
@@ -237,21 +146,13 @@ def _add_run_parser(sub: Any) -> None:
                    help="built-in controller (default dlqr); not with --policy")
     p.add_argument("--observer", choices=OBSERVERS, default=None,
                    help="built-in observer (default kalman); not with --policy")
-    p.add_argument("--episodes", type=_positive_int, default=100,
+    p.add_argument("--episodes", type=Kind("PositiveInt"), default=100,
                    help="number of episodes (default 100)")
-    p.add_argument("--seed", type=_nonneg_int, default=0,
+    p.add_argument("--seed", type=Kind("NonNegativeInt"), default=0,
                    help="the run's seed; episode k draws from episode_seed(seed, k) (default 0)")
-    p.add_argument("--duration", type=_number, default=defaults.DURATION,
-                   help=f"episode length in s, at most 10⁸ control periods (default "
-                        f"{defaults.DURATION:g})")
-    p.add_argument("--noise-scale", type=_number, default=1.0,
-                   help="multiplies both noises' standard deviations (0 = noise-free; default 1); "
-                        "the estimators stay designed for the nominal noise")
-    p.add_argument("--theta0", type=_number, default=defaults.X0[1],
+    add_flags(p, "run")                 # the declared settings (problem/), run's front end
+    p.add_argument("--theta0", type=Kind("Finite"), default=defaults.X0[1],
                    help=f"initial pole angle in rad, e.g. --theta0 -0.1 (default {defaults.X0[1]:g})")
-    p.add_argument("--estimate0", choices=("zero", "true"), default="zero",
-                   help="initial estimate: x̂₀ = 0 or the true x₀ (default zero)")
-    add_burn_in_option(p)
     p.add_argument("--plant", choices=PLANTS, default="mujoco",
                    help="the simulated plant: MuJoCo, or the model's linearisation discretised "
                         "exactly (linear-zoh) or by the lecture's forward Euler at the control "
@@ -266,7 +167,7 @@ def _add_run_parser(sub: Any) -> None:
     p.add_argument("--backend", choices=("rollout", "step"), default="rollout",
                    help="batched MuJoCo (mujoco.batch) or a plain mj_step loop; bit-identical results "
                         "(default rollout)")
-    p.add_argument("--nthread", type=_nonneg_int, default=None,
+    p.add_argument("--nthread", type=Kind("NonNegativeInt"), default=None,
                    help="physics threads (default: the CPU cores available, at most 8)")
     p.add_argument("--record", metavar="FILE.rrd", default=None,
                    help="write a Rerun recording of every episode to FILE.rrd (default: none)")
@@ -278,23 +179,12 @@ def _add_run_parser(sub: Any) -> None:
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: configuration, summary and every episode row")
     add_call_timeout(p)
-    add_limit_options(p)
     _add_design_options(p)
 
 
 def _add_sensing_options(p: argparse.ArgumentParser) -> None:
-    """``run``'s sensing and actuation: delays, sample losses, actuator lag, randomised plants."""
-    g = p.add_argument_group("sensing and actuation")
-    g.add_argument("--measurement-delay", type=_number, default=0.0, metavar="S",
-                   help="age of the measurement the policy receives, in s (a whole number of "
-                        "control periods; default 0)")
-    g.add_argument("--actuator-delay", type=_number, default=0.0, metavar="S",
-                   help="delay of the force, in s (a whole number of control periods; default 0)")
-    g.add_argument("--dropout", type=_number, default=0.0, metavar="P",
-                   help="probability that a measurement sample is lost (the policy gets nan; "
-                        "default 0)")
-    g.add_argument("--actuator-tau", type=_number, default=0.0, metavar="S",
-                   help="time constant of a first-order lag of the force, in s (default 0: none)")
+    """``run``'s randomised plants (the delays, sample losses and lag are declared flags)."""
+    g = p.add_argument_group("randomised plants")
     g.add_argument("--randomize", action="append", default=None, metavar="KEY=LO:HI",
                    help="per-episode uniform scale of a parameter of the simulated plant, e.g. "
                         "pole_mass_scale=0.8:1.2 (repeatable; keys pole_mass_scale, "
@@ -308,7 +198,7 @@ def _add_plot_options(p: argparse.ArgumentParser) -> None:
                    help="draw one episode to FILE (.png, .svg or .pdf): p, θ, ṗ, θ̇ with the "
                         "estimate ± 2σ, the measurement y and the force u with its saturation "
                         "(default: none)")
-    g.add_argument("--plot-episode", type=_nonneg_int, default=0, metavar="K",
+    g.add_argument("--plot-episode", type=Kind("NonNegativeInt"), default=0, metavar="K",
                    help="the episode --plot draws, 0 … --episodes − 1 (default 0, the first)")
 
 
@@ -321,9 +211,9 @@ def _add_bench_parser(sub: Any) -> None:
     p.add_argument("experiment",
                    help="a shipped experiment (lecture, noise, plugins, …), NAME.toml in the "
                         "current folder, or a path to a TOML file")
-    p.add_argument("--episodes", type=_positive_int, default=None,
+    p.add_argument("--episodes", type=Kind("PositiveInt"), default=None,
                    help="episodes per configuration (default: the file's)")
-    p.add_argument("--seed", type=_nonneg_int, default=None, help="seed (default: the file's)")
+    p.add_argument("--seed", type=Kind("NonNegativeInt"), default=None, help="seed (default: the file's)")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="results folder (default results/<name> under the current folder)")
     p.add_argument("--model", default=None, metavar="XML",
@@ -344,7 +234,7 @@ def _add_bench_parser(sub: Any) -> None:
     p.add_argument("--record", metavar="DIR", default=None,
                    help="also record the worst/median/best/first-failing episode of each "
                         "configuration into DIR (default: none)")
-    p.add_argument("--nthread", type=_nonneg_int, default=None,
+    p.add_argument("--nthread", type=Kind("NonNegativeInt"), default=None,
                    help="physics threads (default: the CPU cores available, at most 8)")
     p.add_argument("--executor", choices=("local", "ray"), default="local",
                    help="where work units run: this process (default) or Ray tasks (needs the "
@@ -376,13 +266,13 @@ def _add_perf_parser(sub: Any) -> None:
                                    "MuJoCo physics of the same batch (open-loop mujoco.rollout "
                                    "and mujoco.batch calls, the faster as the baseline), "
                                    "alternating, and optionally the peak memory of long benches.")
-    p.add_argument("--episodes", type=_positive_int, default=1024,
+    p.add_argument("--episodes", type=Kind("PositiveInt"), default=1024,
                    help="episodes in the batch (default 1024)")
-    p.add_argument("--duration", type=_number, default=2.0,
+    p.add_argument("--duration", type=Kind("Finite"), default=2.0,
                    help="seconds simulated per episode (default 2)")
-    p.add_argument("--nthread", type=_nonneg_int, default=None,
+    p.add_argument("--nthread", type=Kind("NonNegativeInt"), default=None,
                    help="physics threads (default: the CPU cores available, at most 8)")
-    p.add_argument("--repeats", type=_positive_int, default=5,
+    p.add_argument("--repeats", type=Kind("PositiveInt"), default=5,
                    help="raw / closed-loop pairs, alternating; medians are compared (default 5)")
     p.add_argument("--memory", action="store_true",
                    help="also measure peak memory of 1000-episode benches of 2 s and 10 s")
@@ -403,7 +293,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_bench_parser(sub)
     _add_report_parser(sub)
     _add_perf_parser(sub)
-    add_score_parsers(sub, _positive_int)
+    add_score_parsers(sub)
     add_theory_parser(sub)
     add_train_parser(sub)
     return parser
@@ -418,7 +308,7 @@ def jsonable(obj: Any) -> Any:
     return plain(obj)
 
 
-def noise_from_args(args: argparse.Namespace, scale: float = 1.0) -> Any:
+def noise_from_args(args: argparse.Namespace, scale: float = defaults.NOISE_SCALE) -> Any:
     from pendulum_lqg.core.noise import NoiseModel
 
     kw: dict[str, Any] = {"process": args.process_noise, "scale": scale}

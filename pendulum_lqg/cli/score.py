@@ -5,13 +5,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 
-def add_parsers(sub: Any, positive_int: Any) -> None:
+def add_parsers(sub: Any) -> None:
     """The ``score`` and ``board`` subcommands (``sub``: the command's subparsers)."""
+    from pendulum_lqg.cli.options import Kind
+
     p = sub.add_parser(
         "score", help="score a policy or a Gymnasium agent on the suites (success, J, gap to LQG)",
         description="Play the suites' fixed episodes with a built-in policy (controller+observer), "
@@ -30,17 +31,17 @@ def add_parsers(sub: Any, positive_int: Any) -> None:
                    help="suite name or file (repeatable), or 'all' (the default): "
                         "full-state, lecture, mismatch, delayed, lossy, noisy, hard; a file "
                         "naming an lti_file is a suite of that plant (built-in policies only)")
-    p.add_argument("--episodes", type=positive_int, default=None, metavar="N",
+    p.add_argument("--episodes", type=Kind("PositiveInt"), default=None, metavar="N",
                    help="episodes per suite (default: the suite's own, 100; fewer is a quick "
                         "score whose fingerprint differs from the full one)")
     p.add_argument("--normalize-action", action="store_true",
                    help="Gymnasium agents act in [-1, 1] (the env's normalize_action)")
-    p.add_argument("--noise-scale", type=_noise_scale, default=None, metavar="X",
+    p.add_argument("--noise-scale", type=Kind("NonNegative"), default=None, metavar="X",
                    help="play every suite with its env's noise_scale set to X (both noises' std "
                         "times X; the designs keep the nominal noise): the noise ladder; the "
                         "suites' fingerprints then differ from the shipped ones unless X is their "
                         "own (default: each suite's own noise)")
-    p.add_argument("--nthread", type=positive_int, default=None,
+    p.add_argument("--nthread", type=Kind("PositiveInt"), default=None,
                    help="physics threads of the batch path (default: the CPU cores, at most 8)")
     p.add_argument("--json", action="store_true", help="print the score file (JSON) instead")
     p.add_argument("--out", default=None, metavar="FILE",
@@ -56,30 +57,11 @@ def add_parsers(sub: Any, positive_int: Any) -> None:
                    help="write the table to FILE too (a new path or a regular file)")
 
 
-def _finite_at_least_zero(what: str) -> Callable[[str], float]:
-    """argparse type: a finite number ≥ 0 (``what`` names it in the error: "number of seconds")."""
-
-    def parse(text: str) -> float:
-        import math
-
-        try:
-            value = float(text)
-        except ValueError:
-            value = math.nan
-        if not math.isfinite(value) or value < 0:
-            raise argparse.ArgumentTypeError(f"expected a finite {what} ≥ 0, got {text!r}")
-        return value
-
-    return parse
-
-
-_seconds = _finite_at_least_zero("number of seconds")
-_noise_scale = _finite_at_least_zero("number")
-
-
 def add_call_timeout(p: argparse.ArgumentParser) -> None:
     """``--call-timeout S``: the watchdog of user code (:mod:`pendulum_lqg.util.watchdog`)."""
-    p.add_argument("--call-timeout", type=_seconds, default=None, metavar="S",
+    from pendulum_lqg.cli.options import Kind
+
+    p.add_argument("--call-timeout", type=Kind("NonNegative"), default=None, metavar="S",
                    help="stop the run, naming the call, when one call into a plug-in or agent "
                         "(factory, reset, act) has not returned after S seconds; 0: never "
                         "(default 600)")

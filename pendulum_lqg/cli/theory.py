@@ -11,8 +11,8 @@ import json
 import math
 from typing import Any
 
-from pendulum_lqg.core import defaults
 from pendulum_lqg.model.lti import LTIPlant
+from pendulum_lqg.problem import defaults
 
 #: ``theory``'s further options of the cart-pole, refused with ``--lti`` (beside
 #: :data:`~pendulum_lqg.cli.lti.CARTPOLE_OPTIONS`).
@@ -24,10 +24,14 @@ _THEORY_ONLY = {"plant": ("linear-zoh", "the file's exact sampled model is the p
                 "force_limit": (None, "the file's force_limit")}
 
 
-def limit_fields(args: argparse.Namespace) -> dict[str, Any]:
-    """The Scenario fields of the limit options."""
-    return {"theta_max": args.theta_max, "track_limit": args.track_limit,
-            "force_limit": args.force_limit}
+def declared_fields(args: argparse.Namespace, command: str) -> dict[str, Any]:
+    """The Scenario fields of ``command``'s declared flags (:mod:`pendulum_lqg.cli.flags`): a
+    setting declared for the command reaches its Scenario without a line here."""
+    from pendulum_lqg.cli.flags import FLAGS
+    from pendulum_lqg.core.scenario import Scenario
+
+    return {name: getattr(args, name) for name, flag in FLAGS.items()
+            if command in flag[4] and name in Scenario.__dataclass_fields__}
 
 
 def cmd_theory(args: argparse.Namespace) -> int:
@@ -40,10 +44,9 @@ def cmd_theory(args: argparse.Namespace) -> int:
     if args.lti is not None:
         return _lti_theory(args)
     plant = load_plant(args.model)
-    scenario = Scenario(control_period=args.dt, duration=args.duration, plant=args.plant,
+    scenario = Scenario(control_period=args.dt, plant=args.plant,
                         noise=noise_from_args(args, scale=args.noise_scale),
-                        x0=(0.0, args.theta0, 0.0, 0.0), estimate0=args.estimate0,
-                        burn_in=args.burn_in, **limit_fields(args))
+                        x0=(0.0, args.theta0, 0.0, 0.0), **declared_fields(args, "theory"))
     names = tuple(args.policies) or LECTURE_POLICIES
     results = lecture_theory(names, plant=plant, scenario=scenario, plant_kind=args.plant,
                              spec=spec_from_args(args))

@@ -1,20 +1,17 @@
-"""The defaults of an episode, written once: :class:`~pendulum_lqg.core.scenario.Scenario`'s fields
-take them, and the environments' keywords, the CLI's options and the experiment files' ``[scenario]``
-tables take theirs from here (this module imports nothing, so the CLI builds its parser without
-numpy). ``tests/core/test_defaults.py`` holds them equal."""
+"""The defaults of an episode: re-exported from :mod:`pendulum_lqg.problem.defaults`, where they are
+written once (the declarations of the problem take theirs from there)."""
 
-from __future__ import annotations
+from pendulum_lqg.problem.defaults import (
+    CONTROL_PERIOD,
+    COST_Q,
+    COST_R,
+    DURATION,
+    NOISE_SCALE,
+    SETTLE_BAND,
+    THETA_MAX,
+    X0,
+    X0_STD,
+)
 
-#: The control period T [s].
-CONTROL_PERIOD = 0.01
-#: The episode length [s].
-DURATION = 10.0
-#: The mean initial state ``[p, θ, ṗ, θ̇]`` [m, rad, m/s, rad/s]: the pole 0.1 rad off upright.
-X0: tuple[float, ...] = (0.0, 0.1, 0.0, 0.0)
-#: The standard deviation of the initial state around :data:`X0`.
-X0_STD: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)
-#: The failure angle |θ| [rad].
-THETA_MAX = 0.5
-#: The cost weights of ``∫ xᵀQx + R u² dt``.
-COST_Q: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
-COST_R = 1.0
+__all__ = ["CONTROL_PERIOD", "COST_Q", "COST_R", "DURATION", "NOISE_SCALE", "SETTLE_BAND",
+           "THETA_MAX", "X0", "X0_STD"]

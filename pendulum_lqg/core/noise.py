@@ -33,8 +33,12 @@ from typing import Literal
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.util.config import config_vector
+from pendulum_lqg.problem import defaults
+from pendulum_lqg.problem.declare import NonNegative, check, config_vector
 from pendulum_lqg.util.limits import MAX_NOISE_SCALE
+
+#: Where process noise enters: on the state (F = I₄) or as generalised forces.
+Process = Literal["state", "force"]
 
 #: Control periods of noise drawn at once per episode.
 CHUNK_PERIODS = 256
@@ -53,7 +57,7 @@ DRAW_LOCK = threading.Lock()
 #: The lecture's per-step process-noise covariance of w (``x ← x + T·w``) and its period.
 LECTURE_W_STEP = 0.04
 LECTURE_PERIOD = 0.01
-LECTURE_V = 0.01
+LECTURE_V = defaults.MEASUREMENT_VARIANCE
 
 
 @dataclass(frozen=True)
@@ -69,36 +73,28 @@ class NoiseModel:
     scale : multiplies both noises' standard deviations (0 = noise-free)
     """
 
-    process: Literal["state", "force"] = "state"
+    process: Process = "state"
     process_density: tuple[float, ...] = field(
         default_factory=lambda: (LECTURE_W_STEP * LECTURE_PERIOD,) * 4)
     measurement_variance: tuple[float, ...] = (LECTURE_V, LECTURE_V)
-    scale: float = 1.0
+    scale: float = defaults.NOISE_SCALE
 
     def __post_init__(self) -> None:
-        if self.process not in ("state", "force"):
-            raise ConfigError(f"process: expected 'state' or 'force', got {self.process!r}")
-        n = 4 if self.process == "state" else 2
-        object.__setattr__(self, "process_density",
-                           config_vector("process_density", self.process_density, n, nonneg=True))
-        object.__setattr__(self, "measurement_variance",
-                           config_vector("measurement_variance", self.measurement_variance, 2,
-                                         nonneg=True))
-        try:
-            if isinstance(self.scale, bool):
-                raise TypeError("a bool is not a noise scale")
-            scale = float(self.scale)
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(f"noise_scale: expected a number ≥ 0, got {self.scale!r}") from exc
-        if not np.isfinite(scale) or scale < 0:
-            raise ConfigError(f"noise_scale: expected a finite number ≥ 0, got {self.scale!r}")
+        n = 4 if check("process", self.process, Process) == "state" else 2
+        scale = float(check("noise_scale", self.scale, NonNegative))
         if scale > MAX_NOISE_SCALE:
             raise ConfigError(f"noise_scale: expected at most {MAX_NOISE_SCALE:g} (the "
                               f"ceiling), got {self.scale!r}")
-        object.__setattr__(self, "scale", scale)
+        values = {"scale": scale,
+                  "process_density": config_vector("process_density", self.process_density, n,
+                                                   nonneg=True),
+                  "measurement_variance": config_vector("measurement_variance",
+                                                        self.measurement_variance, 2, nonneg=True)}
+        for name, value in values.items():          # each in its declared type
+            object.__setattr__(self, name, value)
 
     @classmethod
-    def lecture(cls, *, scale: float = 1.0) -> NoiseModel:
+    def lecture(cls, *, scale: float = defaults.NOISE_SCALE) -> NoiseModel:
         """The lecture scenario: V = 0.01·I₂ per sample; ``x ← x + T·w``, w ~ N(0, 0.04·I₄) at
         T = 0.01 s, i.e. a state-noise density W = 0.04 · 0.01 · I₄ = 4·10⁻⁴·I₄."""
         return cls(scale=scale)

@@ -9,16 +9,14 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Literal
+from functools import cache
 
-import numpy as np
-
-from pendulum_lqg.core import defaults
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.plant import ModelOverrides, Randomization
-from pendulum_lqg.names import PLANTS
-from pendulum_lqg.util.config import config_vector, positive_limit, positive_number
+from pendulum_lqg.problem import defaults
+from pendulum_lqg.problem.declare import Declared, NonNegative, check, coerce, declared
+from pendulum_lqg.problem.scenario import Estimate0, Plant, ScenarioSettings
 from pendulum_lqg.util.limits import MAX_DELAY_PERIODS, check_control_period, check_duration
 
 
@@ -74,15 +72,15 @@ class Scenario:
     noise: NoiseModel = field(default_factory=NoiseModel.lecture)
     x0: tuple[float, ...] = defaults.X0
     x0_std: tuple[float, ...] = defaults.X0_STD
-    estimate0: Literal["zero", "true"] = "zero"
+    estimate0: Estimate0 = "zero"
     theta_max: float = defaults.THETA_MAX
     track_limit: float | None = None
     force_limit: float | None = None
-    settle_band: float = 0.02
+    settle_band: float = defaults.SETTLE_BAND
     cost_Q: tuple[float, ...] = defaults.COST_Q
     cost_R: float = defaults.COST_R
     overrides: ModelOverrides = field(default_factory=ModelOverrides)
-    plant: str = "mujoco"
+    plant: Plant = "mujoco"
     measurement_delay: float = 0.0
     actuator_delay: float = 0.0
     dropout: float = 0.0
@@ -91,27 +89,18 @@ class Scenario:
     burn_in: float = 0.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "control_period", check_control_period(self.control_period))
-        for name in ("duration", "settle_band", "cost_R"):
-            object.__setattr__(self, name, positive_number(name, getattr(self, name)))
-        object.__setattr__(self, "theta_max", positive_limit("theta_max", self.theta_max))
-        for name in ("track_limit", "force_limit"):
-            if getattr(self, name) is not None:
-                object.__setattr__(self, name, positive_limit(name, getattr(self, name)))
+        # each declared setting in its declared type (problem.scenario): one path, one error line
+        for setting in _settings():
+            object.__setattr__(self, setting.name, coerce(setting, getattr(self, setting.name)))
+        object.__setattr__(self, "randomize", Randomization.from_mapping(self.randomize))
+        check_control_period(self.control_period)
         check_duration(self.duration, self.control_period)     # at most MAX_PERIODS periods
-        self._check_burn_in()
-        object.__setattr__(self, "x0", config_vector("x0", self.x0, 4))
-        object.__setattr__(self, "x0_std", config_vector("x0_std", self.x0_std, 4, nonneg=True))
-        object.__setattr__(self, "cost_Q", config_vector("cost_Q", self.cost_Q, 4, nonneg=True))
-        if self.estimate0 not in ("zero", "true"):
-            raise ConfigError(f"estimate0: expected 'zero' or 'true', got {self.estimate0!r}")
+        check_burn_in(self.burn_in, self.control_period, self.duration)
         if not isinstance(self.noise, NoiseModel):
             raise ConfigError("noise: expected a NoiseModel")
         if not isinstance(self.overrides, ModelOverrides):
             raise ConfigError("overrides: expected a ModelOverrides")
-        self._check_sensing_and_actuation()
-        if self.plant not in PLANTS:
-            raise ConfigError(f"plant: expected one of {', '.join(PLANTS)}, got {self.plant!r}")
+        self._check_delays()
         if self.plant != "mujoco" and self.noise.process == "force":
             raise ConfigError(f"plant: {self.plant!r} takes process noise on the state (the "
                               "lecture model); force noise needs plant = 'mujoco'")
@@ -122,14 +111,8 @@ class Scenario:
             raise ConfigError(f"randomize: per-episode models need plant = 'mujoco', got plant = "
                               f"{self.plant!r}")
 
-    def _check_sensing_and_actuation(self) -> None:
-        """Validate the delay, dropout, lag and randomisation fields (all off by default)."""
-        for name in ("measurement_delay", "actuator_delay", "dropout", "actuator_tau"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float) \
-                    or not np.isfinite(value) or value < 0:
-                raise ConfigError(f"{name}: expected a finite number ≥ 0, got {value!r}")
-            object.__setattr__(self, name, float(value))
+    def _check_delays(self) -> None:
+        """The delays: whole control periods, at most :data:`MAX_DELAY_PERIODS`."""
         for name in ("measurement_delay", "actuator_delay"):
             periods = getattr(self, name) / self.control_period
             if not periods <= MAX_DELAY_PERIODS:
@@ -139,13 +122,6 @@ class Scenario:
             if abs(periods - round(periods)) > 1e-9 * max(1.0, periods):
                 raise ConfigError(f"{name}: expected a whole number of control periods "
                                   f"(T = {self.control_period:g} s), got {getattr(self, name)!r} s")
-        if self.dropout >= 1:
-            raise ConfigError(f"dropout: expected a probability in [0, 1), got {self.dropout!r}")
-        object.__setattr__(self, "randomize", Randomization.from_mapping(self.randomize))
-
-    def _check_burn_in(self) -> None:
-        object.__setattr__(self, "burn_in", check_burn_in(self.burn_in, self.control_period,
-                                                          self.duration))
 
     @property
     def burn_in_periods(self) -> int:
@@ -182,13 +158,17 @@ class Scenario:
 
 
 def check_burn_in(burn_in: object, control_period: float, duration: float) -> float:
-    """``burn_in`` [s] as a float: finite, ≥ 0, and leaving at least one of the episode's
+    """``burn_in`` [s] as a float: a finite number ≥ 0 leaving at least one of the episode's
     ``max(1, round(duration / T))`` control periods (it is rounded to ``round(burn_in / T)``
     periods); otherwise a one-line :class:`ConfigError` naming ``burn_in``."""
-    if isinstance(burn_in, bool) or not isinstance(burn_in, int | float) \
-            or not np.isfinite(burn_in) or burn_in < 0:
-        raise ConfigError(f"burn_in: expected a finite number of seconds ≥ 0, got {burn_in!r}")
+    burn_in = float(check("burn_in", burn_in, NonNegative))
     if round(burn_in / control_period) >= max(1, round(duration / control_period)):
         raise ConfigError(f"burn_in: expected less than the episode's duration ({duration:g} s), "
                           f"got {burn_in!r} s")
-    return float(burn_in)
+    return burn_in
+
+
+@cache
+def _settings() -> list[Declared]:
+    """The scenario's declared settings (read once)."""
+    return declared(ScenarioSettings)

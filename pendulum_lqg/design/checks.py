@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from pendulum_lqg.errors import DesignError, PendulumLQGError, ShapeError
-from pendulum_lqg.util.config import positive_number
+from pendulum_lqg.problem.declare import positive_number
 
 #: Relative tolerance for symmetry / definiteness / rank decisions.
 RTOL = 1e-9

@@ -5,6 +5,7 @@ module             concept
 =================  ===============================================================
 ``registration``   :data:`~pendulum_lqg.envs.registration.ENV_ID` and its registration
 ``config``         the keywords both envs take, the action map and the reward
+``keywords``       the ``EnvKeywords`` TypedDict (generated from ``problem``'s declarations)
 ``single``         :class:`~pendulum_lqg.envs.single.CartPoleLQGEnv` (one episode)
 ``vector``         :class:`~pendulum_lqg.envs.vector.CartPoleLQGVectorEnv` (a batch)
 ``render``         offscreen frames for ``render()``

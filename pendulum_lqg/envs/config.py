@@ -9,40 +9,55 @@ floats. The plant, the noise, the saturation, the failure rule and the cost are 
 
 from __future__ import annotations
 
-import inspect
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Literal, overload
+from functools import cache
+from typing import Any, Literal, Unpack, overload
 
 import numpy as np
 from gymnasium import spaces
 
-from pendulum_lqg.core import defaults
 from pendulum_lqg.core.loop import Simulator
-from pendulum_lqg.core.noise import LECTURE_V, NoiseModel
+from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.core.scenario import Scenario
+from pendulum_lqg.envs.keywords import EnvKeywords
 from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
-from pendulum_lqg.model.plant import ModelOverrides, Plant, load_plant
-from pendulum_lqg.names import OBSERVATION_MODES
-from pendulum_lqg.util.config import positive_number
+from pendulum_lqg.model.plant import ModelOverrides, Plant, Randomization, load_plant
+from pendulum_lqg.problem import defaults
+from pendulum_lqg.problem.declare import PositiveInt, check, coerce, declared
+from pendulum_lqg.problem.env import EnvSettings, env_keywords
 
 ObservationMode = Literal["measurement", "state"]
 
 
-#: Default reward scale: the cost rate [J/s] at which a step's reward is e⁻¹ (the lecture LQG
-#: policy runs at ≈ 3.4 J/s, the full-state LQR at ≈ 0.18 J/s).
-DEFAULT_REWARD_SCALE = 10.0
+#: Default reward scale [J/s] (:data:`pendulum_lqg.problem.defaults.REWARD_SCALE`).
+DEFAULT_REWARD_SCALE = defaults.REWARD_SCALE
 
 #: The smallest reward of a step that survives: the smallest normal float, where ``exp`` of a
 #: very large cost would underflow to the failure reward 0.
 REWARD_FLOOR = float(np.finfo(np.float64).smallest_normal)
 
 
+@cache
+def _keywords() -> tuple[str, ...]:
+    """The environments' keywords, in their declared order."""
+    return tuple(d.name for d in env_keywords())
+
+
+def _overrides(value: object) -> ModelOverrides:
+    """The ``model_overrides`` keyword: a mapping, a :class:`ModelOverrides` or ``None``."""
+    if value is None:
+        return ModelOverrides()
+    if isinstance(value, ModelOverrides):
+        return value
+    if isinstance(value, Mapping):
+        return ModelOverrides.from_mapping(dict(value))
+    raise ConfigError(f"model_overrides: expected a mapping or a ModelOverrides, got {value!r}")
+
+
 def positive_int(name: str, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-        raise ConfigError(f"{name}: expected a positive integer, got {value!r}")
-    return int(value)
+    return int(check(name, value, PositiveInt))
 
 
 
@@ -60,72 +75,35 @@ class EnvConfig:
     model_path: str | None
 
     @classmethod
-    def from_keywords(cls, keywords: dict[str, Any]) -> EnvConfig:
-        """:meth:`build` from an env's ``**keywords`` (an unknown keyword is a one-line error)."""
-        unknown = sorted(set(keywords) - set(inspect.signature(cls.build).parameters))
-        if unknown:
-            known = ", ".join(p for p in inspect.signature(cls.build).parameters if p != "cls")
-            raise ConfigError(f"{unknown[0]}: not a keyword of the environment; known: {known}, "
-                              "and normalize_action, render_mode, width, height")
+    def from_keywords(cls, keywords: Mapping[str, Any]) -> EnvConfig:
+        """:meth:`build` from a mapping of keywords (an env's ``**config``, a suite's ``[env]``)."""
         return cls.build(**keywords)
 
     @classmethod
-    def build(cls, *, control_period: float = defaults.CONTROL_PERIOD,
-              duration: float = defaults.DURATION,
-              observation_mode: ObservationMode = "measurement", noise_scale: float = 1.0,
-              process_noise: Literal["state", "force"] = "state",
-              process_density: float | Sequence[float] | None = None,
-              measurement_variance: float | Sequence[float] = LECTURE_V,
-              x0: Sequence[float] = defaults.X0, x0_std: Sequence[float] = defaults.X0_STD,
-              theta_max: float = defaults.THETA_MAX,
-              track_limit: float | None = None, force_limit: float | None = None,
-              cost_Q: Sequence[float] = defaults.COST_Q, cost_R: float = defaults.COST_R,
-              reward_scale: float = DEFAULT_REWARD_SCALE,
-              model_overrides: Mapping[str, float] | ModelOverrides | None = None,
-              model_path: str | None = None, plant: str = "mujoco",
-              measurement_delay: float = 0.0, actuator_delay: float = 0.0, dropout: float = 0.0,
-              actuator_tau: float = 0.0, randomize: Mapping[str, Sequence[float]] | None = None,
-              ) -> EnvConfig:
-        """The one list of the environments' scenario keywords and their defaults (documented in
-        :class:`CartPoleLQGEnv`); both env classes pass their ``**config`` here."""
-        if observation_mode not in OBSERVATION_MODES:
-            raise ConfigError(f"observation_mode: expected 'measurement' or 'state', got "
-                              f"{observation_mode!r}")
-        if process_noise not in ("state", "force"):
-            raise ConfigError(f"process_noise: expected 'state' or 'force', got {process_noise!r}")
-        if process_density is None:
-            if process_noise == "force":
-                raise ConfigError("process_density: required with process_noise='force' "
-                                  "(2 densities, [N²·s, N²m²·s])")
-            noise = NoiseModel(measurement_variance=measurement_variance,  # type: ignore[arg-type]
-                               scale=noise_scale)
-        else:
-            noise = NoiseModel(process=process_noise,
-                               process_density=process_density,  # type: ignore[arg-type]
-                               measurement_variance=measurement_variance,  # type: ignore[arg-type]
-                               scale=noise_scale)
-        if model_overrides is None:
-            overrides = ModelOverrides()
-        elif isinstance(model_overrides, ModelOverrides):
-            overrides = model_overrides
-        elif isinstance(model_overrides, Mapping):
-            overrides = ModelOverrides.from_mapping(dict(model_overrides))
-        else:
-            raise ConfigError(f"model_overrides: expected a mapping or a ModelOverrides, got "
-                              f"{model_overrides!r}")
-        if model_path is not None and not isinstance(model_path, str):
-            raise ConfigError(f"model_path: expected a path string, got {model_path!r}")
-        scenario = Scenario(control_period=control_period, duration=duration, noise=noise,
-                            x0=x0, x0_std=x0_std, theta_max=theta_max,  # type: ignore[arg-type]
-                            track_limit=track_limit, force_limit=force_limit,
-                            cost_Q=cost_Q, cost_R=cost_R, overrides=overrides,  # type: ignore[arg-type]
-                            plant=plant,
-                            measurement_delay=measurement_delay, actuator_delay=actuator_delay,
-                            dropout=dropout, actuator_tau=actuator_tau,
-                            randomize=dict(randomize) if isinstance(randomize, Mapping)
-                            else randomize)  # type: ignore[arg-type]
-        return cls(scenario=scenario, observation_mode=observation_mode,
-                   reward_scale=positive_number("reward_scale", reward_scale), model_path=model_path)
+    def build(cls, **keywords: Unpack[EnvKeywords]) -> EnvConfig:
+        """The validated configuration of the environments' keywords (declared once in
+        :mod:`pendulum_lqg.problem.env`, typed by :class:`~pendulum_lqg.envs.keywords.EnvKeywords`);
+        an unknown keyword or an invalid value is a one-line :class:`ConfigError` naming it."""
+        given: dict[str, Any] = dict(keywords)
+        known = _keywords()
+        unknown = sorted(set(given) - set(known))
+        if unknown:
+            raise ConfigError(f"{unknown[0]}: not a keyword of the environment; known: "
+                              f"{', '.join(known)}, and normalize_action, render_mode, width, "
+                              "height")
+        own = {d.name: coerce(d, given.pop(d.name, d.default)) if d.name != "model_overrides"
+               else given.pop(d.name, None) for d in declared(EnvSettings)}
+        if own["process_density"] is None and own["process_noise"] == "force":
+            raise ConfigError("process_density: required with process_noise='force' "
+                              "(2 densities, [N²·s, N²m²·s])")
+        noise_keywords = {"process_density": own["process_density"]} \
+            if own["process_density"] is not None else {}
+        noise = NoiseModel(process=own["process_noise"], scale=own["noise_scale"],
+                           measurement_variance=own["measurement_variance"], **noise_keywords)
+        scenario = Scenario(**given, noise=noise, overrides=_overrides(own["model_overrides"]),
+                            randomize=Randomization.from_mapping(own["randomize"]))
+        return cls(scenario=scenario, observation_mode=own["observation_mode"],
+                   reward_scale=own["reward_scale"], model_path=own["model_path"])
 
     def make_simulator(self, *, nthread: int | None) -> tuple[Plant, Simulator]:
         plant = load_plant(self.model_path, overrides=self.scenario.overrides)
@@ -205,8 +183,7 @@ class Actions:
     """
 
     def __init__(self, u_max: float, normalize: object) -> None:
-        if not isinstance(normalize, bool):
-            raise ConfigError(f"normalize_action: expected True or False, got {normalize!r}")
+        normalize = bool(check("normalize_action", normalize, bool))
         if normalize and not math.isfinite(u_max):
             raise ConfigError("normalize_action: needs a finite force_limit (an action in [−1, 1] "
                               "maps onto [−force_limit, force_limit])")

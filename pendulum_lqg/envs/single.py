@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, SupportsFloat
+from typing import Any, SupportsFloat, Unpack
 
 import gymnasium as gym
 import numpy as np
@@ -11,6 +11,7 @@ from gymnasium.wrappers import TimeLimit
 
 from pendulum_lqg.core.rules import FAIL_NONE, FAIL_REASONS
 from pendulum_lqg.envs.config import Actions, EnvConfig, step_reward
+from pendulum_lqg.envs.keywords import EnvKeywords
 from pendulum_lqg.envs.render import Frames, image_size
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 
@@ -153,8 +154,8 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 100}  # noqa: RUF012
 
     def __init__(self, *, normalize_action: bool = False, render_mode: str | None = None,
-                 width: int = 640, height: int = 480, **config: Any) -> None:
-        self.config = EnvConfig.from_keywords(config)
+                 width: int = 640, height: int = 480, **config: Unpack[EnvKeywords]) -> None:
+        self.config = EnvConfig.build(**config)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ConfigError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode

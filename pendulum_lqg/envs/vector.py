@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, Unpack
 
 import gymnasium as gym
 import numpy as np
@@ -15,6 +15,7 @@ from gymnasium.vector.utils import batch_space
 from pendulum_lqg.core.loop import StepResult
 from pendulum_lqg.core.rules import FAIL_NONE, FAIL_REASONS
 from pendulum_lqg.envs.config import Actions, EnvConfig, positive_int, step_reward
+from pendulum_lqg.envs.keywords import EnvKeywords
 from pendulum_lqg.envs.render import Frames, image_size
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.util.limits import MAX_NUM_ENVS, check_at_most
@@ -71,7 +72,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
     def __init__(self, num_envs: int, *, autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
                  max_episode_steps: int | None = None, nthread: int | None = None,
                  normalize_action: bool = False, render_mode: str | None = None,
-                 width: int = 640, height: int = 480, **config: Any) -> None:
+                 width: int = 640, height: int = 480, **config: Unpack[EnvKeywords]) -> None:
         self.num_envs = check_at_most("num_envs", positive_int("num_envs", num_envs),
                                       MAX_NUM_ENVS, "each sub-env is a row of every array of "
                                       "the batched simulation core")
@@ -79,7 +80,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
         if render_mode is not None and render_mode != "rgb_array":
             raise ConfigError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
-        self.config = EnvConfig.from_keywords(config)
+        self.config = EnvConfig.build(**config)
         self.scenario = self.config.scenario
         self.observation_mode = self.config.observation_mode
         self.plant, self._sim = self.config.make_simulator(nthread=nthread)

@@ -43,6 +43,7 @@ import numpy as np
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.learn.runs import RUNS_FOLDER, output_path, write_text
+from pendulum_lqg.problem import defaults
 from pendulum_lqg.util.files import save_figure
 from pendulum_lqg.util.scripts import script_status
 
@@ -56,7 +57,7 @@ def trained_noise(model: Path) -> float:
     """The noise scale a model was trained at (its record's ``env.noise_scale``, default 1)."""
     from pendulum_lqg.scoreboard.sb3 import read_metadata
 
-    return float(read_metadata(model)["env"].get("noise_scale", 1.0))
+    return float(read_metadata(model)["env"].get("noise_scale", defaults.NOISE_SCALE))
 
 
 def score(models: list[Path], scales: list[float], suite_name: str, out: Path, *,

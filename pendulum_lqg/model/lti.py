@@ -368,7 +368,7 @@ def _short(value: Any) -> str:
 
 def _limits(where: Where, key: str, value: Any, count: int) -> np.ndarray:
     """``count`` limits, each a positive number or ``inf`` (the string too); one number for all."""
-    from pendulum_lqg.util.config import positive_limit
+    from pendulum_lqg.problem.declare import positive_limit
 
     items: Any = value if isinstance(value, list | tuple | np.ndarray) else [value] * count
     what = f"one or {count} limits, each a positive number or inf"

@@ -24,7 +24,9 @@ import numpy as np
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.interface import Layout, LinearModel
 from pendulum_lqg.model.interface import steps_per_period as steps_per_period  # its old home
-from pendulum_lqg.util.config import check_keys, positive_number
+from pendulum_lqg.problem import defaults
+from pendulum_lqg.problem.declare import positive_number
+from pendulum_lqg.problem.errors import check_keys
 
 STATE_NAMES: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")
 OUTPUT_NAMES: tuple[str, ...] = ("p", "theta")
@@ -36,9 +38,10 @@ SENSORS = ("cart_position", "pole_angle")
 
 #: The cart-pole's layout (with the default scenario's initial state and weights): metrics of p
 #: and θ (θ's columns first), the settling time of θ, ``y = [p, θ]``.
-CARTPOLE = Layout(states=STATE_NAMES, outputs=OUTPUT_NAMES, x0=np.array([0.0, 0.1, 0.0, 0.0]),
-                  x0_std=np.zeros(4), C=None, cost_Q=(1.0,) * 4, cost_R=1.0, state_limits=None,
-                  covariances=None, reported=2, order=(1, 0), settle=1)
+CARTPOLE = Layout(states=STATE_NAMES, outputs=OUTPUT_NAMES, x0=np.array(defaults.X0),
+                  x0_std=np.array(defaults.X0_STD), C=None, cost_Q=defaults.COST_Q,
+                  cost_R=defaults.COST_R, state_limits=None, covariances=None, reported=2,
+                  order=(1, 0), settle=1)
 
 
 def default_model_path() -> Path:

@@ -9,6 +9,7 @@ import numpy as np
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.lti import LTI_CONTROLLERS, LTI_OBSERVERS, LTIPlant
+from pendulum_lqg.problem import defaults
 
 
 def design_lti_policy(plant: LTIPlant, name: str, *,
@@ -78,7 +79,8 @@ def default_observer_z(plant: LTIPlant, K: np.ndarray) -> np.ndarray:
     return np.linalg.eigvals(plant.Phi - plant.Gamma @ K) ** 3
 
 
-def lti_scenario(plant: LTIPlant, *, duration: float = 10.0, noise_scale: float = 1.0,
+def lti_scenario(plant: LTIPlant, *, duration: float = defaults.DURATION,
+                 noise_scale: float = defaults.NOISE_SCALE,
                  **fields: Any) -> Any:
     """The :class:`~pendulum_lqg.core.scenario.Scenario` an LTI plant runs under (``run --lti``,
     ``bench`` with ``lti_file``): its own period, the plant ``linear-zoh`` (its exact sampled
@@ -92,7 +94,8 @@ def lti_scenario(plant: LTIPlant, *, duration: float = 10.0, noise_scale: float 
 
 
 def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+luenberger"), *,
-               noise_scale: float = 1.0, duration: float = 10.0, estimate0: str = "zero",
+               noise_scale: float = defaults.NOISE_SCALE, duration: float = defaults.DURATION,
+               estimate0: str = "zero",
                burn_in: float = 0.0) -> dict[str, Any]:
     """The stationary closed loop (:class:`~pendulum_lqg.policies.theory.ClosedLoopTheory`) of
     each built-in policy on ``plant`` with its noise scaled by ``noise_scale`` (std), and the
@@ -106,7 +109,7 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
     from pendulum_lqg.policies.closed_loop import StationaryProblem, linear_estimator
     from pendulum_lqg.policies.episode_theory import episode_start
     from pendulum_lqg.policies.theory import stationary
-    from pendulum_lqg.util.config import positive_number
+    from pendulum_lqg.problem.declare import positive_number
 
     s = NoiseModel(scale=noise_scale).scale
     duration = positive_number("duration", duration)

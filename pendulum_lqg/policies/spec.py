@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -11,7 +12,7 @@ from pendulum_lqg import design
 from pendulum_lqg.design.checks import as_poles
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS
-from pendulum_lqg.util.config import config_vector
+from pendulum_lqg.problem.declare import NonNegative, check, config_vector, positive_number
 
 
 @dataclass(frozen=True)
@@ -50,28 +51,18 @@ class DesignSpec:
         if self.observer not in OBSERVERS:
             raise ConfigError(f"observer: unknown {self.observer!r}; expected one of "
                               + ", ".join(OBSERVERS))
-        if self.discretization not in ("zoh", "euler"):
-            raise ConfigError(f"discretization: expected 'zoh' or 'euler', got "
-                              f"{self.discretization!r}")
-        for name in ("Q", "M0"):             # diagonals of 4×4 matrices
-            object.__setattr__(self, name, config_vector(name, getattr(self, name), 4, nonneg=True))
-        if isinstance(self.R, bool) or not isinstance(self.R, int | float | np.integer
-                                                      | np.floating):
-            raise ConfigError(f"R: expected a finite positive number, got {self.R!r}")
-        r = float(self.R)
-        if not np.isfinite(r) or r <= 0:
-            raise ConfigError(f"R: expected a finite positive number, got {self.R!r}")
-        object.__setattr__(self, "R", r)
+        check("discretization", self.discretization, Literal["zoh", "euler"])
+        values: dict[str, object] = {
+            "Q": config_vector("Q", self.Q, 4, nonneg=True),     # diagonals of 4×4 matrices
+            "M0": config_vector("M0", self.M0, 4, nonneg=True),
+            "R": positive_number("R", self.R),
+            "lmi_decay": float(check("lmi_decay", self.lmi_decay, NonNegative))}
         for name, count in (("observer_poles", 4), ("reduced_order_poles", 2),
                             ("ackermann_poles", 4)):
             checked = as_poles(name, getattr(self, name), count)
-            poles = tuple(complex(p) if abs(p.imag) > 0 else float(p.real) for p in checked)
-            object.__setattr__(self, name, poles)
-        decay = self.lmi_decay
-        if isinstance(decay, bool) or not isinstance(decay, int | float) \
-                or not np.isfinite(decay) or decay < 0:
-            raise ConfigError(f"lmi_decay: expected a finite rate ≥ 0 [1/s], got {decay!r}")
-        object.__setattr__(self, "lmi_decay", float(decay))
+            values[name] = tuple(complex(p) if abs(p.imag) > 0 else float(p.real) for p in checked)
+        for name, value in values.items():          # each in its checked type
+            object.__setattr__(self, name, value)
 
     @property
     def Q_matrix(self) -> np.ndarray:

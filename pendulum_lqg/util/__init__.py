@@ -1,9 +1,8 @@
-"""Small services every layer uses: numbers, ceilings, files, JSON, progress, resources, scripts.
+"""Small services every layer uses: ceilings, files, JSON, progress, resources, scripts.
 
 =============  ========================================================================
 module         concept
 =============  ========================================================================
-``config``     the validators of configuration numbers and tables
 ``limits``     the documented ceilings that keep a run finite in memory and time
 ``files``      the one output rule: atomic writes, only new paths or regular files replaced
 ``jsonio``     one JSON-ready conversion for results (arrays, complex, non-finite floats)

@@ -12,10 +12,8 @@ import operator
 from collections.abc import Iterable
 from typing import Any
 
-import numpy as np
-
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.util.config import positive_number
+from pendulum_lqg.problem.declare import positive_number
 
 #: ``run`` keeps every episode row in memory (and prints them with ``--json``); larger studies go
 #: through ``bench``, which streams them to disk unit by unit.
@@ -150,14 +148,7 @@ def check_control_period(control_period: object) -> float:
 def check_duration(duration: float, control_period: float) -> float:
     """``duration`` [s] as a float, finite, positive and at most :data:`MAX_PERIODS` control
     periods long; otherwise a one-line :class:`ConfigError` naming ``duration``."""
-    if isinstance(duration, bool) or not isinstance(duration, int | float | np.integer
-                                                    | np.floating):
-        raise ConfigError(f"duration: expected a finite positive number of seconds, got "
-                          f"{duration!r}")
-    value = float(duration)
-    if not np.isfinite(value) or value <= 0:
-        raise ConfigError(f"duration: expected a finite positive number of seconds, got "
-                          f"{duration!r}")
+    value = positive_number("duration", duration)
     T = float(control_period)
     if not value / T <= MAX_PERIODS:               # also catches an overflow to inf
         raise ConfigError(f"duration: expected at most {MAX_PERIODS:.0e} control periods "

@@ -136,7 +136,7 @@ def test_theory_negative_noise_scale_refused(capsys, lti):
         main(["theory", *lti, "--noise-scale", "-1"])
     assert exc.value.code == 2
     err = capsys.readouterr().err
-    assert "--noise-scale: expected a number ≥ 0, got '-1'" in err and "Traceback" not in err
+    assert "--noise-scale: expected a finite number ≥ 0, got '-1'" in err and "Traceback" not in err
 
 
 @pytest.mark.parametrize("lti", [[], ["--lti", DI]])
@@ -146,7 +146,7 @@ def test_theory_negative_duration_refused(capsys, lti):
         main(["theory", *lti, "--duration", "-5"])
     assert exc.value.code == 2
     err = capsys.readouterr().err
-    assert "--duration: expected a positive number, got '-5'" in err and "Traceback" not in err
+    assert "--duration: expected a finite positive number, got '-5'" in err and "Traceback" not in err
 
 
 def test_run_prints_the_theory_beside_the_monte_carlo(capsys):

@@ -703,10 +703,8 @@ def test_headless_machine_gets_a_working_gl_backend_automatically():
 
 
 def test_both_envs_take_their_keywords_from_one_list():
-    """``EnvConfig.build`` is the one keyword list: an unknown keyword is a one-line ConfigError
+    """The declarations are the one keyword list: an unknown keyword is a one-line ConfigError
     naming it for the single and the vector env alike, and both get the same defaults."""
-    import inspect
-
     from pendulum_lqg.envs.config import EnvConfig
     from pendulum_lqg.envs.single import CartPoleLQGEnv
     from pendulum_lqg.envs.vector import CartPoleLQGVectorEnv
@@ -715,7 +713,9 @@ def test_both_envs_take_their_keywords_from_one_list():
     for make in (lambda: CartPoleLQGEnv(bogus=1), lambda: CartPoleLQGVectorEnv(2, bogus=1)):
         with pytest.raises(ConfigError, match=r"^bogus: not a keyword of the environment"):
             make()
-    defaults = {k: p.default for k, p in inspect.signature(EnvConfig.build).parameters.items()}
+    from pendulum_lqg.problem.env import env_keywords
+
+    defaults = {d.name: d.default for d in env_keywords()}
     assert defaults["duration"] == 10.0 and defaults["control_period"] == 0.01
     single, vector = CartPoleLQGEnv(), CartPoleLQGVectorEnv(2)
     assert single.scenario == vector.scenario == EnvConfig.build().scenario

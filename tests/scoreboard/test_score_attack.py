@@ -411,8 +411,8 @@ def test_item12_a_call_that_cannot_be_interrupted_ends_the_process_with_the_line
 
 def test_item12_call_timeout_must_be_a_non_negative_number(capsys):
     status, err = run_cli(capsys, ["score", "dlqr+kalman", "--call-timeout", "-1"])
-    assert status == 2 and "error: argument --call-timeout: expected a finite number of seconds" \
-        in err
+    assert status == 2 and "error: argument --call-timeout: expected a finite number ≥ 0, " \
+        "got '-1'" in err
 
 
 # ---- 13: nesting ceilings in TOML ----------------------------------------------------------------------

@@ -29,7 +29,7 @@ def test_a_changed_scenario_default_reaches_the_env_and_the_cli():
     """The env's keywords and the CLI's options read the one module of defaults when they are
     built, so a new default there is the new default everywhere."""
     code = textwrap.dedent("""
-        from pendulum_lqg.core import defaults
+        from pendulum_lqg.problem import defaults
         defaults.THETA_MAX, defaults.DURATION = 0.25, 4.0
         from pendulum_lqg.core.scenario import Scenario
         from pendulum_lqg.envs.config import EnvConfig
