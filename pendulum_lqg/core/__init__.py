@@ -10,6 +10,7 @@ Data flow::
 module                  concept
 ======================  =====================================================================
 ``scenario``            :class:`~pendulum_lqg.core.scenario.Scenario`: the control problem
+``scenario_fields``     its declared settings as dataclass fields (generated, do not edit)
 ``defaults``            the defaults of an episode, written once
 ``layout``              the plant's vectors as the loop sees them: sizes, names, roles
 ``rules``               the rules of a control period, each one function (below)

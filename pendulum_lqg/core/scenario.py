@@ -3,28 +3,39 @@
 A :class:`Scenario` is validated once, when it is made; the loop, the runner and the envs take it
 as it is. It holds no physical parameter of the plant — those live in the MJCF model
 (:mod:`pendulum_lqg.model.plant`) — only what the experiment chooses.
+
+Each setting is declared once, in :class:`~pendulum_lqg.problem.scenario.ScenarioSettings`; the
+Scenario's fields for them are its base :class:`~pendulum_lqg.core.scenario_fields.ScenarioFields`,
+written from the declarations by ``python -m pendulum_lqg.problem.generate`` (a generated module,
+so type checkers see every field and its type; ``--check`` keeps it in step). A declared field is a
+:class:`~pendulum_lqg.problem.declare.Coerced` descriptor: the dataclass's own ``__init__`` — and
+so ``Scenario(duration=5, x0=[...])`` and :func:`dataclasses.replace` alike — sets it through the
+descriptor, which stores the value converted to its declared type (an int a float, a list a
+tuple, ``"inf"`` ∞) or raises the one-line error naming it. The conversion thus happens as the
+frozen instance is made, with no second pass writing over it, and the Scenario stays a plain
+frozen dataclass (fields, ``asdict``, ``replace``, equality, hashing, pickling unchanged). Only its
+own tables (``noise``, ``overrides``, ``randomize``) and the rules across fields are written here.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from functools import cache
 
 from pendulum_lqg.core.noise import NoiseModel
+from pendulum_lqg.core.scenario_fields import ScenarioFields
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.plant import ModelOverrides, Randomization
-from pendulum_lqg.problem import defaults
-from pendulum_lqg.problem.declare import Declared, NonNegative, check, coerce, declared
-from pendulum_lqg.problem.scenario import Estimate0, Plant, ScenarioSettings
+from pendulum_lqg.problem.declare import Converted, NonNegative, check
 from pendulum_lqg.util.limits import MAX_DELAY_PERIODS, check_control_period, check_duration
 
 
 @dataclass(frozen=True)
-class Scenario:
+class Scenario(ScenarioFields):
     """The control problem every policy faces: timing, noise, initial state, failure rule, cost.
 
-    Attributes
+    Attributes (the declared settings' help, unit and default are their declarations', in
+    :mod:`pendulum_lqg.problem.scenario`; the notes below add detail)
     ----------
     control_period : T [s], an integer multiple of the model's physics step
     duration : episode length [s] (rounded to whole control periods)
@@ -67,32 +78,12 @@ class Scenario:
         settling time always take the whole episode
     """
 
-    control_period: float = defaults.CONTROL_PERIOD
-    duration: float = defaults.DURATION
     noise: NoiseModel = field(default_factory=NoiseModel.lecture)
-    x0: tuple[float, ...] = defaults.X0
-    x0_std: tuple[float, ...] = defaults.X0_STD
-    estimate0: Estimate0 = "zero"
-    theta_max: float = defaults.THETA_MAX
-    track_limit: float | None = None
-    force_limit: float | None = None
-    settle_band: float = defaults.SETTLE_BAND
-    cost_Q: tuple[float, ...] = defaults.COST_Q
-    cost_R: float = defaults.COST_R
     overrides: ModelOverrides = field(default_factory=ModelOverrides)
-    plant: Plant = "mujoco"
-    measurement_delay: float = 0.0
-    actuator_delay: float = 0.0
-    dropout: float = 0.0
-    actuator_tau: float = 0.0
-    randomize: Randomization = field(default_factory=Randomization)
-    burn_in: float = 0.0
+    randomize: Converted[Randomization] = Converted(  # noqa: RUF009 (a descriptor, not a value)
+        Randomization.from_mapping, Randomization())
 
     def __post_init__(self) -> None:
-        # each declared setting in its declared type (problem.scenario): one path, one error line
-        for setting in _settings():
-            object.__setattr__(self, setting.name, coerce(setting, getattr(self, setting.name)))
-        object.__setattr__(self, "randomize", Randomization.from_mapping(self.randomize))
         check_control_period(self.control_period)
         check_duration(self.duration, self.control_period)     # at most MAX_PERIODS periods
         check_burn_in(self.burn_in, self.control_period, self.duration)
@@ -146,7 +137,10 @@ class Scenario:
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
 
     def to_dict(self) -> dict[str, object]:
-        d = dataclasses.asdict(self)
+        """The scenario as plain data, the keys in :data:`_WRITTEN_ORDER` first (the order the
+        configurations have always been written in), then any later setting in declared order."""
+        fields = dataclasses.asdict(self)
+        d = {name: fields.pop(name) for name in _WRITTEN_ORDER} | fields
         d["overrides"] = {k: v for k, v in d["overrides"].items() if v is not None}
         d["randomize"] = {k: list(v) for k, v in d["randomize"].items() if v is not None}
         for name in ("theta_max", "track_limit", "force_limit"):   # a switched-off limit: "inf"
@@ -168,7 +162,9 @@ def check_burn_in(burn_in: object, control_period: float, duration: float) -> fl
     return burn_in
 
 
-@cache
-def _settings() -> list[Declared]:
-    """The scenario's declared settings (read once)."""
-    return declared(ScenarioSettings)
+#: The keys of :meth:`Scenario.to_dict` in the order of the configurations written so far (the
+#: dataclass puts the declared fields, :class:`ScenarioFields`, before the tables).
+_WRITTEN_ORDER = ("control_period", "duration", "noise", "x0", "x0_std", "estimate0", "theta_max",
+                  "track_limit", "force_limit", "settle_band", "cost_Q", "cost_R", "overrides",
+                  "plant", "measurement_delay", "actuator_delay", "dropout", "actuator_tau",
+                  "randomize", "burn_in")

@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Annotated, Any, Literal, get_args, get_origin
+from functools import cache
+from typing import Annotated, Any, Generic, Literal, TypeVar, get_args, get_origin
 
 import msgspec
 
@@ -233,3 +235,59 @@ def coerce(setting: Declared, value: Any) -> Any:
             items *= n
         return check(setting.name, items, setting.type, shown=value)
     return check(setting.name, value, setting.type)
+
+
+T = TypeVar("T")
+
+
+class Converted(Generic[T]):
+    """A field of a frozen dataclass whose value is converted as the instance is made.
+
+    A data descriptor as the field's default: the dataclass's ``__init__`` (and so
+    :func:`dataclasses.replace`) sets each field through it, and :meth:`__set__` stores
+    ``convert(value)`` — there is no second pass over a built instance. Read on the class it is the
+    field's ``default`` (the dataclass takes that as the default of its ``__init__``); assignment
+    after ``__init__`` stays the frozen dataclass's error.
+    """
+
+    def __init__(self, convert: Callable[[Any], T], default: T) -> None:
+        self.convert = convert
+        self.default = default
+        self.name = ""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, obj: object | None, owner: type | None = None) -> T:
+        if obj is None:
+            return self.default
+        try:
+            return obj.__dict__[self.name]
+        except KeyError:
+            raise AttributeError(self.name) from None
+
+    def __set__(self, obj: object, value: T) -> None:
+        obj.__dict__[self.name] = self.convert(value)
+
+
+class Coerced(Converted[T]):
+    """A setting declared on ``struct`` as a dataclass field (:class:`Converted`): its default the
+    declared one, its value :func:`coerce`-ed to the declared type (one error line naming it)."""
+
+    def __init__(self, struct: type[msgspec.Struct]) -> None:
+        super().__init__(self._coerce, None)  # type: ignore[arg-type]
+        self.struct = struct
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        super().__set_name__(owner, name)
+        # the default straight from the Struct: reading the type hints waits for the first value
+        self.default = self.struct.__struct_defaults__[self.struct.__struct_fields__.index(name)]
+
+    def _coerce(self, value: Any) -> T:
+        return coerce(_by_name(self.struct)[self.name], value)
+
+
+@cache
+def _by_name(struct: type[msgspec.Struct]) -> dict[str, Declared]:
+    """The settings declared by ``struct``, by name (read once, at the first value set)."""
+    return {d.name: d for d in declared(struct)}

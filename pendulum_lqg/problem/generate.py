@@ -2,6 +2,8 @@
 (``--check``: exit 1, naming them, if any is out of date; a test runs it).
 
 * ``pendulum_lqg/envs/keywords.py`` — the ``EnvKeywords`` TypedDict of the environments' keywords;
+* ``pendulum_lqg/core/scenario_fields.py`` — the declared settings as the fields of a frozen
+  dataclass, the base of :class:`~pendulum_lqg.core.scenario.Scenario` (type checkers see them);
 * ``pendulum_lqg/cli/flags.py`` — the command line's declared flags, as plain data (the CLI builds
   its parser from it without importing msgspec);
 * ``docs/_generated/*.md`` — the keyword tables the docs pages include.
@@ -36,6 +38,39 @@ def python_type(kind: Any) -> str:
     if get_origin(base) is dict:
         return f"Mapping[str, {python_type(args[1])}]"
     return "None" if base is type(None) else base.__name__
+
+
+def stored_type(kind: Any) -> str:
+    """The type a declared value is stored as (after its conversion), as Python source."""
+    base = strip(kind)
+    args = get_args(base)
+    if get_origin(base) is Literal:
+        return f"Literal[{', '.join(repr(a) for a in args)}]"
+    if get_origin(base) is tuple:
+        return f"tuple[{stored_type(args[0])}, ...]" if Ellipsis in args else \
+            f"tuple[{', '.join(stored_type(a) for a in args)}]"
+    if args:                                                      # a union
+        return " | ".join(stored_type(a) for a in args)
+    return "None" if base is type(None) else base.__name__
+
+
+def scenario_fields_module() -> str:
+    lines = [f'"""{HEADER}.', "",
+             "The settings declared in :class:`~pendulum_lqg.problem.scenario.ScenarioSettings` as "
+             "the fields of a", "frozen dataclass, the base of "
+             ":class:`~pendulum_lqg.core.scenario.Scenario`: each field is a", ":class:`~pendulum_"
+             "lqg.problem.declare.Coerced` descriptor, whose default is the declared one and which",
+             "converts a value to the declared type as the instance is made.", '"""', "",
+             "# ruff: noqa: E501, RUF009", "from __future__ import annotations", "",
+             "from dataclasses import dataclass", "from typing import Literal", "",
+             "from pendulum_lqg.problem.declare import Coerced",
+             "from pendulum_lqg.problem.scenario import ScenarioSettings", "",
+             "",
+             "@dataclass(frozen=True)", "class ScenarioFields:",
+             '    """The declared scenario settings (see the module docstring)."""', ""]
+    for d in declared(ScenarioSettings):
+        lines.append(f"    {d.name}: Coerced[{stored_type(d.type)}] = Coerced(ScenarioSettings)")
+    return "\n".join(lines) + "\n"
 
 
 def _default(value: Any) -> str:
@@ -115,6 +150,7 @@ def targets() -> dict[Path, str]:
     return {
         ROOT / "pendulum_lqg/envs/keywords.py": keywords_module(),
         ROOT / "pendulum_lqg/cli/flags.py": flags_module(),
+        ROOT / "pendulum_lqg/core/scenario_fields.py": scenario_fields_module(),
         ROOT / "docs/_generated/env-keywords.md": table(env_keywords(), "keyword"),
         ROOT / "docs/_generated/scenario-keys.md": table(scenario_file, "key"),
         ROOT / "docs/_generated/cli-flags.md": _flags_table(flags),
