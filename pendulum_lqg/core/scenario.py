@@ -34,8 +34,10 @@ from pendulum_lqg.util.limits import MAX_DELAY_PERIODS, check_control_period, ch
 class Scenario(ScenarioFields):
     """The control problem every policy faces: timing, noise, initial state, failure rule, cost.
 
-    Attributes (the declared settings' help, unit and default are their declarations', in
-    :mod:`pendulum_lqg.problem.scenario`; the notes below add detail)
+    The declared settings' help, unit and default are their declarations' (in
+    :mod:`pendulum_lqg.problem.scenario`); the notes below add detail.
+
+    Attributes
     ----------
     control_period : T [s], an integer multiple of the model's physics step
     duration : episode length [s] (rounded to whole control periods)
