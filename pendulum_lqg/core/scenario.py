@@ -82,8 +82,8 @@ class Scenario(ScenarioFields):
 
     noise: NoiseModel = field(default_factory=NoiseModel.lecture)
     overrides: ModelOverrides = field(default_factory=ModelOverrides)
-    randomize: Converted[Randomization] = Converted(  # noqa: RUF009 (a descriptor, not a value)
-        Randomization.from_mapping, Randomization())
+    randomize: Converted[Randomization] = Converted(
+        lambda _, value: Randomization.from_mapping(value), Randomization())
 
     def __post_init__(self) -> None:
         check_control_period(self.control_period)

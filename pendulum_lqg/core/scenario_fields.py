@@ -6,7 +6,7 @@ frozen dataclass, the base of :class:`~pendulum_lqg.core.scenario.Scenario`: eac
 converts a value to the declared type as the instance is made.
 """
 
-# ruff: noqa: E501, RUF009
+# ruff: noqa: E501
 from __future__ import annotations
 
 from dataclasses import dataclass

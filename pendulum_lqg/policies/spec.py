@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -12,7 +13,31 @@ from pendulum_lqg import design
 from pendulum_lqg.design.checks import as_poles
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS
-from pendulum_lqg.problem.declare import NonNegative, check, config_vector, positive_number
+from pendulum_lqg.problem.declare import (
+    Converted,
+    NonNegative,
+    check,
+    config_vector,
+    positive_number,
+)
+
+
+def _vector4(name: str, value: object) -> tuple[float, ...]:
+    """The diagonal of a 4×4 weight or covariance: 4 numbers ≥ 0 (one number repeated)."""
+    return config_vector(name, value, 4, nonneg=True)
+
+
+def _non_negative(name: str, value: object) -> float:
+    return float(check(name, value, NonNegative))
+
+
+def _poles(count: int) -> Callable[[str, object], tuple[complex, ...]]:
+    """The conversion of a set of ``count`` poles: closed under conjugation, each real one a
+    float."""
+    def convert(name: str, value: object) -> tuple[complex, ...]:
+        checked = as_poles(name, value, count)  # type: ignore[arg-type]
+        return tuple(complex(p) if abs(p.imag) > 0 else float(p.real) for p in checked)
+    return convert
 
 
 @dataclass(frozen=True)
@@ -35,14 +60,16 @@ class DesignSpec:
 
     controller: str = "dlqr"
     observer: str = "kalman"
-    Q: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
-    R: float = 1.0
-    observer_poles: tuple[float, ...] = design.DEFAULT_OBSERVER_POLES
-    M0: tuple[float, ...] = (0.01, 0.01, 0.01, 0.01)
+    Q: Converted[tuple[float, ...]] = Converted(_vector4, (1.0, 1.0, 1.0, 1.0))
+    R: Converted[float] = Converted(positive_number, 1.0)
+    observer_poles: Converted[tuple[complex, ...]] = Converted(
+        _poles(4), design.DEFAULT_OBSERVER_POLES)
+    M0: Converted[tuple[float, ...]] = Converted(_vector4, (0.01, 0.01, 0.01, 0.01))
     discretization: str = "zoh"
-    reduced_order_poles: tuple[float, ...] = (-4.0, -5.0)
-    ackermann_poles: tuple[float, ...] = (-2.0, -3.0, -4.0, -5.0)
-    lmi_decay: float = 1.0
+    reduced_order_poles: Converted[tuple[complex, ...]] = Converted(_poles(2), (-4.0, -5.0))
+    ackermann_poles: Converted[tuple[complex, ...]] = Converted(
+        _poles(4), (-2.0, -3.0, -4.0, -5.0))
+    lmi_decay: Converted[float] = Converted(_non_negative, 1.0)
 
     def __post_init__(self) -> None:
         if self.controller not in CONTROLLERS:
@@ -52,17 +79,6 @@ class DesignSpec:
             raise ConfigError(f"observer: unknown {self.observer!r}; expected one of "
                               + ", ".join(OBSERVERS))
         check("discretization", self.discretization, Literal["zoh", "euler"])
-        values: dict[str, object] = {
-            "Q": config_vector("Q", self.Q, 4, nonneg=True),     # diagonals of 4×4 matrices
-            "M0": config_vector("M0", self.M0, 4, nonneg=True),
-            "R": positive_number("R", self.R),
-            "lmi_decay": float(check("lmi_decay", self.lmi_decay, NonNegative))}
-        for name, count in (("observer_poles", 4), ("reduced_order_poles", 2),
-                            ("ackermann_poles", 4)):
-            checked = as_poles(name, getattr(self, name), count)
-            values[name] = tuple(complex(p) if abs(p.imag) > 0 else float(p.real) for p in checked)
-        for name, value in values.items():          # each in its checked type
-            object.__setattr__(self, name, value)
 
     @property
     def Q_matrix(self) -> np.ndarray:

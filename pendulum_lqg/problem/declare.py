@@ -245,12 +245,13 @@ class Converted(Generic[T]):
 
     A data descriptor as the field's default: the dataclass's ``__init__`` (and so
     :func:`dataclasses.replace`) sets each field through it, and :meth:`__set__` stores
-    ``convert(value)`` — there is no second pass over a built instance. Read on the class it is the
+    ``convert(name, value)`` (``name`` the field's, for the error line) — there is no second pass
+    over a built instance. Read on the class it is the
     field's ``default`` (the dataclass takes that as the default of its ``__init__``); assignment
     after ``__init__`` stays the frozen dataclass's error.
     """
 
-    def __init__(self, convert: Callable[[Any], T], default: T) -> None:
+    def __init__(self, convert: Callable[[str, Any], T], default: T) -> None:
         self.convert = convert
         self.default = default
         self.name = ""
@@ -267,7 +268,7 @@ class Converted(Generic[T]):
             raise AttributeError(self.name) from None
 
     def __set__(self, obj: object, value: T) -> None:
-        obj.__dict__[self.name] = self.convert(value)
+        obj.__dict__[self.name] = self.convert(self.name, value)
 
 
 class Coerced(Converted[T]):
@@ -283,8 +284,8 @@ class Coerced(Converted[T]):
         # the default straight from the Struct: reading the type hints waits for the first value
         self.default = self.struct.__struct_defaults__[self.struct.__struct_fields__.index(name)]
 
-    def _coerce(self, value: Any) -> T:
-        return coerce(_by_name(self.struct)[self.name], value)
+    def _coerce(self, name: str, value: Any) -> T:
+        return coerce(_by_name(self.struct)[name], value)
 
 
 @cache

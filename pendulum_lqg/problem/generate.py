@@ -61,7 +61,7 @@ def scenario_fields_module() -> str:
              ":class:`~pendulum_lqg.core.scenario.Scenario`: each field is a", ":class:`~pendulum_"
              "lqg.problem.declare.Coerced` descriptor, whose default is the declared one and which",
              "converts a value to the declared type as the instance is made.", '"""', "",
-             "# ruff: noqa: E501, RUF009", "from __future__ import annotations", "",
+             "# ruff: noqa: E501", "from __future__ import annotations", "",
              "from dataclasses import dataclass", "from typing import Literal", "",
              "from pendulum_lqg.problem.declare import Coerced",
              "from pendulum_lqg.problem.scenario import ScenarioSettings", "",
