@@ -27,14 +27,14 @@ length.
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.problem import defaults
-from pendulum_lqg.problem.declare import NonNegative, check, config_vector
+from pendulum_lqg.problem.declare import Converted, NonNegative, check, config_vector
 from pendulum_lqg.util.limits import MAX_NOISE_SCALE
 
 #: Where process noise enters: on the state (F = I₄) or as generalised forces.
@@ -60,6 +60,27 @@ LECTURE_PERIOD = 0.01
 LECTURE_V = defaults.MEASUREMENT_VARIANCE
 
 
+def _scale(name: str, value: object) -> float:
+    """``scale``, a number ≥ 0 up to the ceiling; its errors name the setting, ``noise_scale``."""
+    scale = float(check("noise_scale", value, NonNegative))
+    if scale > MAX_NOISE_SCALE:
+        raise ConfigError(f"noise_scale: expected at most {MAX_NOISE_SCALE:g} (the "
+                          f"ceiling), got {value!r}")
+    return scale
+
+
+class _Density(Converted[tuple[float, ...]]):
+    """``process_density``: as many numbers ≥ 0 as the process has (4 on the state, 2 as
+    forces; one number is repeated) — the ``process`` field, set before it, says which."""
+
+    def __init__(self) -> None:
+        super().__init__(lambda name, value: value, (LECTURE_W_STEP * LECTURE_PERIOD,) * 4)
+
+    def __set__(self, obj: object, value: tuple[float, ...]) -> None:
+        n = 4 if obj.__dict__["process"] == "state" else 2
+        obj.__dict__[self.name] = config_vector(self.name, value, n, nonneg=True)
+
+
 @dataclass(frozen=True)
 class NoiseModel:
     """Noise of one scenario (see the module docstring for units).
@@ -73,25 +94,11 @@ class NoiseModel:
     scale : multiplies both noises' standard deviations (0 = noise-free)
     """
 
-    process: Process = "state"
-    process_density: tuple[float, ...] = field(
-        default_factory=lambda: (LECTURE_W_STEP * LECTURE_PERIOD,) * 4)
-    measurement_variance: tuple[float, ...] = (LECTURE_V, LECTURE_V)
-    scale: float = defaults.NOISE_SCALE
-
-    def __post_init__(self) -> None:
-        n = 4 if check("process", self.process, Process) == "state" else 2
-        scale = float(check("noise_scale", self.scale, NonNegative))
-        if scale > MAX_NOISE_SCALE:
-            raise ConfigError(f"noise_scale: expected at most {MAX_NOISE_SCALE:g} (the "
-                              f"ceiling), got {self.scale!r}")
-        values = {"scale": scale,
-                  "process_density": config_vector("process_density", self.process_density, n,
-                                                   nonneg=True),
-                  "measurement_variance": config_vector("measurement_variance",
-                                                        self.measurement_variance, 2, nonneg=True)}
-        for name, value in values.items():          # each in its declared type
-            object.__setattr__(self, name, value)
+    process: Converted[Process] = Converted(lambda name, value: check(name, value, Process), "state")
+    process_density: _Density = _Density()
+    measurement_variance: Converted[tuple[float, ...]] = Converted(
+        lambda name, value: config_vector(name, value, 2, nonneg=True), (LECTURE_V, LECTURE_V))
+    scale: Converted[float] = Converted(_scale, defaults.NOISE_SCALE)
 
     @classmethod
     def lecture(cls, *, scale: float = defaults.NOISE_SCALE) -> NoiseModel:
