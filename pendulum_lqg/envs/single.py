@@ -96,7 +96,9 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
       `TimeLimit`, a step that fails on the last step is both terminated and truncated.
 
     ## Arguments
-    `gymnasium.make("pendulum_lqg/CartPoleLQG-v0", **kwargs)`, all keywords optional:
+    `gymnasium.make("pendulum_lqg/CartPoleLQG-v0", **kwargs)`, all keywords optional. The complete
+    list, generated from the declarations in `pendulum_lqg.problem`, is the typed `EnvKeywords`
+    (`pendulum_lqg.envs.keywords`) and the table of docs/gymnasium.md; this one adds notes:
 
     | Parameter              | Type                 | Default       | Description                       |
     |------------------------|----------------------|---------------|-----------------------------------|
