@@ -25,7 +25,7 @@ from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.model.interface import Layout, LinearModel
 from pendulum_lqg.model.interface import steps_per_period as steps_per_period  # its old home
 from pendulum_lqg.problem import defaults
-from pendulum_lqg.problem.declare import positive_number
+from pendulum_lqg.problem.declare import Converted, positive_number
 from pendulum_lqg.problem.errors import check_keys
 
 STATE_NAMES: tuple[str, ...] = ("p", "theta", "p_dot", "theta_dot")
@@ -113,6 +113,21 @@ def _named_geom(spec: mujoco.MjSpec, name: str, why: str) -> mujoco.MjsGeom:
 RANDOMIZABLE: tuple[str, ...] = ("pole_mass_scale", "pole_length_scale", "cart_mass_scale")
 
 
+def _scale_range(name: str, value: Any) -> tuple[float, float] | None:
+    """A randomisation range ``[lo, hi]`` as floats with ``0 < lo ≤ hi``, or ``None``."""
+    if value is None:
+        return None
+    try:
+        lo, hi = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ConfigError(f"randomize.{name}: expected [lo, hi], two numbers with "
+                          f"0 < lo ≤ hi, got {value!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo <= hi):
+        raise ConfigError(f"randomize.{name}: expected [lo, hi] with 0 < lo ≤ hi, got "
+                          f"{value!r}")
+    return lo, hi
+
+
 @dataclass(frozen=True)
 class Randomization:
     """Per-episode parameter randomisation of the simulated plant: ``[lo, hi]`` multipliers.
@@ -129,24 +144,10 @@ class Randomization:
         ``None`` (not randomised)
     """
 
-    pole_mass_scale: tuple[float, float] | None = None
-    pole_length_scale: tuple[float, float] | None = None
-    cart_mass_scale: tuple[float, float] | None = None
-
-    def __post_init__(self) -> None:
-        for name in RANDOMIZABLE:
-            value = getattr(self, name)
-            if value is None:
-                continue
-            try:
-                lo, hi = (float(v) for v in value)
-            except (TypeError, ValueError):
-                raise ConfigError(f"randomize.{name}: expected [lo, hi], two numbers with "
-                                  f"0 < lo ≤ hi, got {value!r}") from None
-            if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo <= hi):
-                raise ConfigError(f"randomize.{name}: expected [lo, hi] with 0 < lo ≤ hi, got "
-                                  f"{value!r}")
-            object.__setattr__(self, name, (lo, hi))
+    # each range converted to (lo, hi) floats as the instance is made (Converted: no second pass)
+    pole_mass_scale: Converted[tuple[float, float] | None] = Converted(_scale_range, None)
+    pole_length_scale: Converted[tuple[float, float] | None] = Converted(_scale_range, None)
+    cart_mass_scale: Converted[tuple[float, float] | None] = Converted(_scale_range, None)
 
     @classmethod
     def from_mapping(cls, data: Any) -> Randomization:
