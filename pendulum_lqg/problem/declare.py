@@ -83,7 +83,8 @@ def declared(struct: type[msgspec.Struct]) -> list[Declared]:
     """The settings declared by ``struct``, in order."""
     hints = _hints(struct)
     out = []
-    for name, default in zip(struct.__struct_fields__, struct.__struct_defaults__, strict=True):
+    for field in msgspec.structs.fields(struct):
+        name, default = field.name, field.default
         kind, info = _split(hints[name])
         out.append(Declared(name, kind, default, info.description or "",
                             (info.extra or {}).get("unit", ""), (info.extra or {}).get("metavar"),
@@ -282,7 +283,7 @@ class Coerced(Converted[T]):
     def __set_name__(self, owner: type, name: str) -> None:
         super().__set_name__(owner, name)
         # the default straight from the Struct: reading the type hints waits for the first value
-        self.default = self.struct.__struct_defaults__[self.struct.__struct_fields__.index(name)]
+        (self.default,) = (f.default for f in msgspec.structs.fields(self.struct) if f.name == name)
 
     def _coerce(self, name: str, value: Any) -> T:
         return coerce(_by_name(self.struct)[name], value)

@@ -200,6 +200,9 @@ _PERF_OLD = ("performance.md's comparison with 0.4.1 and 0.3.4, run on git workt
              "versions (their own environments); each of this version's commands in it is run "
              "below in its own block")
 #: documented command → why the test does not run it
+#: docs/architecture.md's count of an import (the validation library's choice)
+_VALGRIND = "PYTHONHASHSEED=0 valgrind --tool=callgrind --callgrind-out-file=/dev/null /tmp/pv/bin/python"
+
 NOT_RUN: dict[str, str] = {
     **dict.fromkeys(["uv run python benchmarks/instructions.py env --public",
                      "uv run python benchmarks/instructions.py vector",
@@ -207,6 +210,13 @@ NOT_RUN: dict[str, str] = {
                     "an instruction count under valgrind, whose start-up alone costs tens of "
                     "seconds: `instructions.py env --steps 20` runs the script's valgrind path; "
                     "these change only the workload it counts"),
+    **dict.fromkeys([
+        "uv venv /tmp/pv && VIRTUAL_ENV=/tmp/pv uv pip install --compile-bytecode pydantic msgspec",
+        *(f"{_VALGRIND} -c \"{code}\"" for code in (
+            "pass", "from msgspec import Struct, Meta, convert",
+            "from pydantic import BaseModel, Field, TypeAdapter"))],
+        "the library choice's measurement: a scratch environment with pydantic, which the project "
+        "does not depend on, downloaded from the package index"),
     "uv sync --compile-bytecode": _INSTALL,
     "uv sync --group docs": _INSTALL,
     "uv build --wheel": "builds the wheel into dist/ of the checkout (CI's package job builds it)",
