@@ -13,7 +13,10 @@ to the instruction:
 * ``loop`` — one ``run_episodes`` of ``--episodes`` DLQR + Kalman episodes of 2 s, one thread;
 * ``import`` — ``import pendulum_lqg.cli`` once, in a fresh interpreter (what every command pays
   before it parses its arguments; bytecode already compiled);
-* ``design`` — ``pendulum-lqg design`` once, imports included, its output discarded.
+* ``design`` — ``pendulum-lqg design`` once, the package's imports included, its output
+  discarded; numpy and ``scipy.linalg`` are imported before the count starts and BLAS is held to
+  one thread through threadpoolctl's API (OpenBLAS's idle threads spin while they wait, so with
+  two of them the count followed the machine's load by billions).
 
 The last two run once (no warm-up: a module is imported once) with ``PYTHONHASHSEED=0`` so that
 two runs of one version count the same set-ups, after compiling the package's bytecode (an edited
@@ -34,12 +37,14 @@ Usage::
     uv run python benchmarks/instructions.py env --out env.callgrind   # keep the profile, then
     callgrind_annotate --inclusive=yes env.callgrind | head -60         # per-function counts
 
-It needs ``valgrind`` on the PATH (``apt-get install valgrind``); a run takes a minute or two.
+It needs ``valgrind`` on the PATH (``apt-get install valgrind``), and ``design`` threadpoolctl (in the
+dev group); a run takes a minute or two.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
 import re
 import shutil
@@ -111,6 +116,14 @@ def once(kind: str, counting: Callable[[bool], None]) -> None:
     import importlib
     import io
 
+    if kind == "design":
+        # the libraries both versions load, loaded first; then every BLAS they loaded on one
+        # thread, so that no idle BLAS thread spins inside the count (threadpoolctl limits the
+        # libraries already loaded: hence after the imports)
+        importlib.import_module("numpy")
+        importlib.import_module("scipy.linalg")
+        from threadpoolctl import threadpool_limits
+        threadpool_limits(limits=1, user_api="blas")
     counting(True)
     cli = importlib.import_module("pendulum_lqg.cli")
     if kind == "design":
@@ -158,6 +171,9 @@ def main(argv: list[str] | None = None) -> None:
     out = None if args.out is None else output_file("--out", args.out, what="callgrind profile")
     if args.tree and not (Path(args.tree) / "pendulum_lqg").is_dir():
         raise ConfigError(f"--tree: expected a checkout holding pendulum_lqg/, got {args.tree!r}")
+    if args.kind == "design" and importlib.util.find_spec("threadpoolctl") is None:
+        raise ConfigError("instructions design: threadpoolctl is not installed (the dev group "
+                          "has it: uv sync)")
     if shutil.which("valgrind") is None:
         raise ConfigError("instructions: valgrind is not on the PATH (apt-get install valgrind)")
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))

@@ -11,6 +11,7 @@ import functools
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
+import msgspec
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -33,7 +34,7 @@ def _one_line(exc: BaseException) -> str:
 
 
 def _non_finite(value: object, seen: int = 0) -> bool:
-    """Whether a result (array, number, tuple/list, dataclass of them) holds a nan or inf."""
+    """Whether a result (array, number, tuple/list, record of them) holds a nan or inf."""
     if seen > 4:                                   # results are shallow; stop on odd nesting
         return False
     if isinstance(value, np.ndarray):
@@ -42,6 +43,8 @@ def _non_finite(value: object, seen: int = 0) -> bool:
         return not bool(np.isfinite(value))
     if isinstance(value, tuple | list):
         return any(_non_finite(v, seen + 1) for v in value)
+    if isinstance(value, msgspec.Struct):         # a design's result record
+        return any(_non_finite(v, seen + 1) for v in msgspec.structs.astuple(value))
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return any(_non_finite(getattr(value, f.name), seen + 1)
                    for f in dataclasses.fields(value))

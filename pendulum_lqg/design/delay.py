@@ -27,8 +27,7 @@ system, and the state the force must be computed for, :math:`x_{n+d_a}`, is pred
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
+import msgspec
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -36,8 +35,7 @@ from pendulum_lqg.design.checks import as_matrix, as_square, design_function
 from pendulum_lqg.errors import ShapeError
 
 
-@dataclass(frozen=True)
-class DelayAugmented:
+class DelayAugmented(msgspec.Struct, frozen=True):
     """The delay-augmented system of :func:`augment_delays`.
 
     Attributes

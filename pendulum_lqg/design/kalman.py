@@ -8,8 +8,7 @@ per-sample covariances ``E{w wᵀ} = W`` (of ``w[n]`` in ``x[n+1] = Φx + Γu + 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
+import msgspec
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import solve_continuous_are, solve_discrete_are
@@ -26,8 +25,7 @@ from pendulum_lqg.design.checks import (
 from pendulum_lqg.errors import DesignError
 
 
-@dataclass(frozen=True)
-class KalmanResult:
+class KalmanResult(msgspec.Struct, frozen=True):
     """Continuous Kalman–Bucy filter.
 
     Attributes
@@ -42,8 +40,7 @@ class KalmanResult:
     poles: np.ndarray
 
 
-@dataclass(frozen=True)
-class DKalmanResult:
+class DKalmanResult(msgspec.Struct, frozen=True):
     """Discrete steady-state Kalman filter, in both forms.
 
     Attributes
@@ -159,8 +156,7 @@ def dkalman(Phi: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLi
     return DKalmanResult(L=L, L_pred=L_pred, M=M, P=P, poles=poles)
 
 
-@dataclass(frozen=True)
-class TimeVaryingKalmanGains:
+class TimeVaryingKalmanGains(msgspec.Struct, frozen=True):
     """Gains and covariances of the time-varying Kalman filter over a horizon.
 
     Attributes

@@ -6,9 +6,9 @@ observer error dynamics, whatever the observer (Kalman or Luenberger) and whiche
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Literal
 
+import msgspec
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -16,8 +16,7 @@ from pendulum_lqg.design.checks import as_loop, design_function
 from pendulum_lqg.errors import DesignError
 
 
-@dataclass(frozen=True)
-class LQGResult:
+class LQGResult(msgspec.Struct, frozen=True):
     """Closed loop of plant + ``u = −K x̂`` + observer.
 
     Attributes

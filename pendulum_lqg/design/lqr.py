@@ -5,8 +5,7 @@ Sign convention everywhere: ``u = −K x`` (MATLAB / python-control).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
+import msgspec
 import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike
@@ -24,8 +23,7 @@ from pendulum_lqg.errors import DesignError
 from pendulum_lqg.util.limits import MAX_RICCATI_FLOATS, check_at_most
 
 
-@dataclass(frozen=True)
-class LQRResult:
+class LQRResult(msgspec.Struct, frozen=True):
     """Result of an infinite-horizon LQR design.
 
     Attributes
@@ -151,8 +149,7 @@ def dlqr(Phi: ArrayLike, Gamma: ArrayLike, Q: ArrayLike, R: ArrayLike, *,
     return LQRResult(K=K, P=P, poles=poles, discrete=True)
 
 
-@dataclass(frozen=True)
-class FiniteHorizonLQR:
+class FiniteHorizonLQR(msgspec.Struct, frozen=True):
     """Time-varying LQR gains from the backward Riccati sweep.
 
     Attributes

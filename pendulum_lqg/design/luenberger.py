@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Literal
 
+import msgspec
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -15,8 +15,7 @@ from pendulum_lqg.errors import DesignError
 DEFAULT_OBSERVER_POLES: tuple[float, ...] = (-0.4, -0.5, -0.6, -0.7)
 
 
-@dataclass(frozen=True)
-class ObserverResult:
+class ObserverResult(msgspec.Struct, frozen=True):
     """A pole-placement observer.
 
     Attributes

@@ -16,9 +16,9 @@ The LMIs are solved with ``cvxpy`` and the Clarabel interior-point solver (impor
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
 from typing import Any
 
+import msgspec
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -92,8 +92,7 @@ def ackermann(A: ArrayLike, C: ArrayLike, poles: ArrayLike) -> ObserverResult:
 
 
 # ---- reduced order -----------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class ReducedOrderObserver:
+class ReducedOrderObserver(msgspec.Struct, frozen=True):
     r"""A reduced-order (minimal-order) observer of the unmeasured part ``w = R x``.
 
     With ``T = [C; R]`` (``[y; w] = T x``) the partitioned model is ``Ā = T A T⁻¹``,
@@ -189,8 +188,7 @@ def dreduced_order_observer(Phi: ArrayLike, Gamma: ArrayLike, C: ArrayLike, pole
 
 
 # ---- LMIs ----------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class LMIObserverResult:
+class LMIObserverResult(msgspec.Struct, frozen=True):
     """An observer gain found by an LMI.
 
     Attributes

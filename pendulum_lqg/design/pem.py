@@ -47,6 +47,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+import msgspec
 import numpy as np
 
 from pendulum_lqg.design.sysid import structured_model, structured_size
@@ -60,8 +61,7 @@ __all__ = ["InnovationsModel", "PEMLayout", "filter_gain", "fit_delays", "fit_in
 _ROWS = 512
 
 
-@dataclass(frozen=True)
-class InnovationsModel:
+class InnovationsModel(msgspec.Struct, frozen=True):
     """An identified innovations-form model (see the module docstring).
 
     Attributes

@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
+import msgspec
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -45,8 +44,7 @@ def pbh_rank_deficient(A: ArrayLike, B: ArrayLike, *, tol: float = 1e-9) -> list
     return pbh_failures(A, B, select=lambda lam: True, tol=tol * scale)
 
 
-@dataclass(frozen=True)
-class StructureReport:
+class StructureReport(msgspec.Struct, frozen=True):
     """Controllability / observability facts of ``(A, B, C)``.
 
     Attributes

@@ -32,8 +32,7 @@ functions, exactly as the built-in ``dlqr+kalman`` is designed on the true one.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
+import msgspec
 import numpy as np
 from scipy.optimize import nnls
 
@@ -44,8 +43,7 @@ __all__ = ["IdentifiedModel", "fit_structured", "identify", "lqg_gains", "markov
            "noise_covariances", "structured_model", "structured_size"]
 
 
-@dataclass(frozen=True)
-class IdentifiedModel:
+class IdentifiedModel(msgspec.Struct, frozen=True):
     """A model identified from data, in the basis ``x = [y, ẏ]``.
 
     Attributes

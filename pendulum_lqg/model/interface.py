@@ -12,17 +12,16 @@ core, which imports the plants (the layers run model → core, never back).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any, NamedTuple, Protocol, runtime_checkable
 
+import msgspec
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.util.limits import MAX_STEPS_PER_PERIOD, check_control_period
 
 
-@dataclass(frozen=True, eq=False)
-class Layout:
+class Layout(msgspec.Struct, frozen=True, eq=False):
     """The vectors of one simulated plant under one scenario.
 
     Attributes

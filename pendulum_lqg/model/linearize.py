@@ -14,9 +14,9 @@ State ``x = [p, θ, ṗ, θ̇]``, input the cart force [N], output ``y = [p, θ]
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Protocol
 
+import msgspec
 import mujoco
 import numpy as np
 
@@ -53,8 +53,7 @@ class CartPoleModel(SimulatedPlant, Protocol):
 FD_EPS = 1e-6
 
 
-@dataclass(frozen=True)
-class ContinuousModel:
+class ContinuousModel(msgspec.Struct, frozen=True):
     """``ẋ = Ax + Bu + F f``, ``y = Cx + Du`` about the upright equilibrium.
 
     Attributes
@@ -74,8 +73,7 @@ class ContinuousModel:
         return structure(self.A, self.B, self.C)
 
 
-@dataclass(frozen=True)
-class DiscreteModel:
+class DiscreteModel(msgspec.Struct, frozen=True):
     """``x[n+1] = Φ x[n] + Γ u[n]``, ``y[n] = C x[n]`` at period ``dt``."""
 
     Phi: np.ndarray

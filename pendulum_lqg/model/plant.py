@@ -18,6 +18,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
+import msgspec
 import mujoco
 import numpy as np
 
@@ -450,7 +451,7 @@ class Plant:
     # ---- the plant interface (pendulum_lqg.model.interface) ---------------------------------
     def layout(self, scenario: Any) -> Layout:
         """The cart-pole's vectors with the scenario's initial state and cost weights."""
-        return dataclasses.replace(CARTPOLE, x0=np.asarray(scenario.x0),
+        return msgspec.structs.replace(CARTPOLE, x0=np.asarray(scenario.x0),
                                    x0_std=np.asarray(scenario.x0_std), cost_Q=scenario.cost_Q,
                                    cost_R=scenario.cost_R)
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
 from functools import cache
 from typing import Annotated, Any, Generic, Literal, TypeVar, get_args, get_origin
 
@@ -61,8 +60,7 @@ def setting(help: str, *, unit: str = "", metavar: str | None = None,
                                                  "fronts": fronts, **extra})
 
 
-@dataclass(frozen=True)
-class Declared:
+class Declared(msgspec.Struct, frozen=True):
     """One declared setting as the front ends read it."""
 
     name: str
