@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import warnings
 
+import msgspec
 import numpy as np
 import pytest
 
@@ -95,9 +96,13 @@ def _garbage(rng, shape):
 
 
 def non_finite_arrays(result, path="result"):
-    """Paths of the arrays and numbers in ``result`` (dataclass, tuple, array) that hold nan/inf."""
+    """Paths of the arrays and numbers in ``result`` (result record, dataclass, tuple, array) that
+    hold nan/inf."""
     import dataclasses
 
+    if isinstance(result, msgspec.Struct):
+        return [q for f in msgspec.structs.fields(result)
+                for q in non_finite_arrays(getattr(result, f.name), f"{path}.{f.name}")]
     if isinstance(result, np.ndarray):
         return [] if result.dtype.kind not in "fc" or np.all(np.isfinite(result)) else [path]
     if isinstance(result, float | complex):
@@ -147,6 +152,32 @@ def _random_call(rng):
     }
     name = str(rng.choice(sorted(calls)))
     return name, calls[name]
+
+
+def test_a_result_record_holding_nan_is_refused_and_the_checker_sees_inside_it():
+    """The results are msgspec Structs: the design layer's finiteness check (and this file's
+    helper, which the garbage test below relies on) look inside them, nested records included."""
+    from pendulum_lqg.design.checks import design_function
+    from pendulum_lqg.design.lqg import LQGResult
+    from pendulum_lqg.design.lqr import LQRResult
+
+    bad = LQRResult(K=np.array([[1.0, np.nan]]), P=np.eye(2), poles=np.array([-1.0, -2.0]),
+                    discrete=False)
+    assert non_finite_arrays(bad) == ["result.K"]
+    assert non_finite_arrays((1.0, [bad])) == ["result[1][0].K"]
+
+    @design_function("Q and R")
+    def returns(value):
+        return value
+
+    with pytest.raises(DesignError, match=r"^returns: the result is not finite .*Q and R$"):
+        returns(bad)
+    with pytest.raises(DesignError, match=r"^returns: the result is not finite"):
+        returns(LQGResult(A_cl=np.eye(2), poles=np.array([np.inf, 1.0]),
+                          controller_poles=np.ones(1), observer_poles=np.ones(1),
+                          separation_error=0.0))
+    good = msgspec.structs.replace(bad, K=np.array([[1.0, 2.0]]))
+    assert returns(good) is good and non_finite_arrays(good) == []
 
 
 def test_random_garbage_raises_only_pendulum_lqg_errors_and_returns_only_finite_arrays():
