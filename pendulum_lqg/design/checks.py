@@ -6,7 +6,6 @@ Errors name the argument, say what was expected and what was found (python-contr
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
@@ -45,9 +44,6 @@ def _non_finite(value: object, seen: int = 0) -> bool:
         return any(_non_finite(v, seen + 1) for v in value)
     if isinstance(value, msgspec.Struct):         # a design's result record
         return any(_non_finite(v, seen + 1) for v in msgspec.structs.astuple(value))
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return any(_non_finite(getattr(value, f.name), seen + 1)
-                   for f in dataclasses.fields(value))
     return False
 
 

@@ -96,10 +96,8 @@ def _garbage(rng, shape):
 
 
 def non_finite_arrays(result, path="result"):
-    """Paths of the arrays and numbers in ``result`` (result record, dataclass, tuple, array) that
-    hold nan/inf."""
-    import dataclasses
-
+    """Paths of the arrays and numbers in ``result`` (result record, tuple, array) that hold
+    nan/inf."""
     if isinstance(result, msgspec.Struct):
         return [q for f in msgspec.structs.fields(result)
                 for q in non_finite_arrays(getattr(result, f.name), f"{path}.{f.name}")]
@@ -109,9 +107,6 @@ def non_finite_arrays(result, path="result"):
         return [] if np.isfinite(result) else [path]
     if isinstance(result, tuple | list):
         return [q for i, v in enumerate(result) for q in non_finite_arrays(v, f"{path}[{i}]")]
-    if dataclasses.is_dataclass(result):
-        return [q for f in dataclasses.fields(result)
-                for q in non_finite_arrays(getattr(result, f.name), f"{path}.{f.name}")]
     return []
 
 
