@@ -39,6 +39,8 @@ class CartPoleModel(SimulatedPlant, Protocol):
     @property
     def sensor_index(self) -> np.ndarray: ...
     @property
+    def ctrl_gear(self) -> float: ...
+    @property
     def gravity(self) -> float: ...
     @property
     def cart_mass(self) -> float: ...
@@ -101,7 +103,7 @@ def _dynamics(plant: CartPoleModel, data: mujoco.MjData, x: np.ndarray, u: float
     m = plant.model
     data.qpos[plant.qpos_index] = x[:2]
     data.qvel[plant.qvel_index] = x[2:]
-    data.ctrl[0] = u
+    data.ctrl[0] = u / plant.ctrl_gear          # u in newtons: the force is gear · ctrl
     data.qfrc_applied[:] = 0.0
     data.qfrc_applied[plant.qvel_index] = f
     mujoco.mj_forward(m, data)
@@ -163,7 +165,7 @@ def discretize_transition(plant: CartPoleModel, dt: float, *, eps: float = FD_EP
     Ah, Bh = np.zeros((nx, nx)), np.zeros((nx, m.nu))
     mujoco.mjd_transitionFD(m, data, eps, True, Ah, Bh, None, None)
     idx = np.concatenate([plant.qvel_index, m.nv + plant.qvel_index])  # tangent-space order
-    Ah, Bh = Ah[np.ix_(idx, idx)], Bh[idx, :]
+    Ah, Bh = Ah[np.ix_(idx, idx)], Bh[idx, :] / plant.ctrl_gear      # per newton, not per ctrl
     Phi, Gamma = np.eye(4), np.zeros((4, m.nu))
     for _ in range(k):
         Gamma = Ah @ Gamma + Bh
@@ -195,13 +197,12 @@ def analytic_linearization(plant: CartPoleModel) -> ContinuousModel:
     M0 = np.array([[mc + mp + arm[0], mp * l_com], [mp * l_com, Ip + mp * l_com**2 + arm[1]]])
     Minv = np.linalg.inv(M0)
     stiffness = np.array([[0.0, 0.0], [0.0, mp * g * l_com]])
-    gear = float(m.actuator_gear[0, 0])
     A = np.zeros((4, 4))
     A[:2, 2:] = np.eye(2)
     A[2:, :2] = Minv @ stiffness
     A[2:, 2:] = -Minv @ np.diag(damp)
     B = np.zeros((4, 1))
-    B[2:, 0] = Minv @ np.array([gear, 0.0])
+    B[2:, 0] = Minv @ np.array([1.0, 0.0])           # per newton on the slider
     F = np.zeros((4, 2))
     F[2:, :] = Minv
     C = np.hstack([np.eye(2), np.zeros((2, 2))])

@@ -255,6 +255,8 @@ class Plant:
 
     #: MuJoCo itself, or its linearisation stepped in numpy (``Scenario.plant``).
     simulators = ("mujoco", "linear-zoh", "linear-euler")
+    #: The state is the joints' own coordinates (the upright is qpos = 0): nothing to add.
+    x_offset = None
 
     def __post_init__(self) -> None:
         m = self.model
@@ -265,10 +267,17 @@ class Plant:
             if mujoco.mj_name2id(m, kind, name) < 0:
                 raise ConfigError(f"model: {self.path} has no {kind.name[6:].lower()} named {name!r}")
         if m.nu != 1:
-            raise ConfigError(f"model: expected exactly one actuator, found {m.nu}")
+            raise ConfigError(f"model: {self.path}: expected exactly one actuator, found {m.nu}")
+        if m.njnt != 2 or m.nq != 2 or m.nv != 2:
+            # the loop rewrites [p, θ, ṗ, θ̇] each period: any other joint would be re-zeroed
+            joints = ", ".join(repr(m.joint(j).name) for j in range(m.njnt))
+            raise ConfigError(f"model: {self.path}: the cart-pole takes exactly the joints "
+                              f"'slider' and 'hinge', found {m.njnt} ({joints}); a model with "
+                              f"more joints is a plant of its own: a plant file, --plant "
+                              f"FILE.toml (docs/family.md)")
         if m.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4:
-            raise ConfigError("model: the RK4 integrator is not supported (mjd_transitionFD "
-                              "refuses it); use Euler or implicitfast")
+            raise ConfigError(f"model: {self.path}: the RK4 integrator is not supported "
+                              f"(mjd_transitionFD refuses it); use Euler or implicitfast")
         self._check_contract()
 
     def _check_contract(self) -> None:
@@ -347,6 +356,11 @@ class Plant:
         lo, hi = self.model.actuator(ACTUATOR).ctrlrange
         gear = float(self.model.actuator(ACTUATOR).gear[0])
         return float(lo * gear), float(hi * gear)
+
+    @property
+    def ctrl_gear(self) -> float:
+        """The motor's gear: the force is ``gear · ctrl``, so MuJoCo's ctrl is ``u / gear``."""
+        return float(self.model.actuator(ACTUATOR).gear[0])
 
     @property
     def u_max(self) -> float:

@@ -94,6 +94,11 @@ class BatchPhysics:
         self.ctrl_buf = np.zeros((capacity, k, ncontrol))
         self.force_cols = 1 + plant.qvel_index             # qfrc_applied's columns in a control row
         self.reset_before = (k - 0.5) * plant.timestep
+        # x is the deviation from the equilibrium q* (x_offset = [q*, 0], None at q* = 0) and u is
+        # in physical units: MuJoCo's ctrl is u / gear
+        self.offset = plant.x_offset
+        self.nq, self.nx = len(plant.qpos_index), 2 * len(plant.qpos_index)
+        self.gear = plant.ctrl_gear
         self._cache: dict[int, _Rows] = {}
         #: Call the batch's C++ core for held forces (see :data:`DIRECT_CALL`); ``False``: always
         #: the public ``Batch.rollout`` (the benchmark that justifies the direct call flips it).
@@ -109,6 +114,10 @@ class BatchPhysics:
         rows = self._rows(out)
         rows.dynamic[...] = self.state0_dynamic              # mj_resetData's values,
         rows.warning.fill(0)                                 # its warnings too (see _Rows)
+        if self.offset is not None:
+            x = x + self.offset
+        if self.gear != 1.0:
+            u = u / self.gear
         if rows.x is not None:
             rows.x[...] = x
         else:                                               # x's columns are not consecutive
@@ -152,7 +161,9 @@ class BatchPhysics:
         if self.aligned:
             buf.reshape(n, -1)[:, 4:4 + 5 * k] = rec.reshape(n, -1)
         else:
-            buf[:, 1:k + 1, :4] = rec[:, :, self.rec_cols]
+            buf[:, 1:k + 1, :self.nx] = rec[:, :, self.rec_cols]
+            if self.offset is not None:
+                buf[:, 1:k + 1, :self.nq] -= self.offset[:self.nq]
 
 
 class _Rows:

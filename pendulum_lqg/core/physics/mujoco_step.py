@@ -42,13 +42,22 @@ class StepPhysics:
         n = out.n
         reset = np.zeros(n, dtype=bool)
         qi, vi = self.plant.qpos_index, self.plant.qvel_index
+        nq = len(qi)
+        # x is the deviation from the equilibrium q*; MuJoCo's qpos is q* + x[:nq]
+        offset = self.plant.x_offset
+        eq = 0.0 if offset is None else offset[:nq]
+        if offset is not None:
+            x = x + offset
+        gear = self.plant.ctrl_gear                         # ctrl = u / gear (u in N or N·m)
+        if gear != 1.0:
+            u = u / gear
         per_step = u.ndim == 2                             # actuator lag: a force per step
         for r in range(n):
             if self.models is not None:
                 m = self.models[r]
             mujoco.mj_resetData(m, d)
-            d.qpos[qi] = x[r, :2]
-            d.qvel[vi] = x[r, 2:]
+            d.qpos[qi] = x[r, :nq]
+            d.qvel[vi] = x[r, nq:]
             d.ctrl[0] = u[r, 0] if per_step else u[r]
             for j in range(k):
                 if per_step:
@@ -56,8 +65,8 @@ class StepPhysics:
                 if forces is not None:
                     d.qfrc_applied[vi] = forces[r, j]
                 mujoco.mj_step(m, d)
-                states[r, j, :2] = d.qpos[qi]
-                states[r, j, 2:] = d.qvel[vi]
+                states[r, j, :nq] = d.qpos[qi] - eq if offset is not None else d.qpos[qi]
+                states[r, j, nq:] = d.qvel[vi]
                 if any(d.warning[w].number for w in INSTABILITY_WARNINGS):
                     # MuJoCo reset the data after an instability: as the batch's rollout does, stop
                     # and hold the state reached for the rest of the period
