@@ -8,5 +8,8 @@ module          concept
 ``linearize``   the cart-pole's continuous ``(A, B, C, D)`` by finite differences
 ``lti``         any linear plant given as matrices (TOML or ``.npz``), sampled at T
 ``lti_layout``  the ``Layout`` of a plant given as matrices (names, x₀, noise, weights)
+``mjcf``        any MuJoCo model as a plant: the plant file, its checks, its simulators
+``mjcf_linear`` a MuJoCo model's linearisation about its equilibrium (continuous and FD)
+``catalog``     the plants a user names: ``--plant NAME|FILE``, the shipped family
 ==============  ==============================================================================
 """

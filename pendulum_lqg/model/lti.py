@@ -123,6 +123,10 @@ class LTIPlant:
     #: What the simulation core asks a plant (:mod:`pendulum_lqg.model.interface`): an LTI plant
     #: is stepped by its own (Φ, Γ) once per control period (no MuJoCo model, no track).
     simulators = ("linear-zoh",)
+    #: The simulator a scenario of this plant uses unless it says otherwise.
+    default_simulator = "linear-zoh"
+    #: What the command line calls it.
+    kind_label = "LTI plant"
     model = None
     track_limit = math.inf
 
@@ -181,6 +185,11 @@ class LTIPlant:
     def discrete(self) -> bool:
         """Given in discrete time (no A, B): only its own (Φ, Γ) exist."""
         return self.A is None
+
+    def transition_fd(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(Φ, Γ)`` of a second route (a MuJoCo plant's ``mjd_transitionFD``); ``None``: the
+        matrices are the plant, there is no other route to check them by."""
+        return None
 
     def process_covariance(self) -> np.ndarray:
         """Covariance of the process noise over one period, ``∫₀ᵀ e^{As} G W Gᵀ e^{Aᵀs} ds``
@@ -514,7 +523,16 @@ def load_lti(path: str | Path) -> LTIPlant:
     """Read an LTI plant from a TOML file or an ``.npz`` archive (module docstring) through the
     file boundary; a relative path not found in the current folder is looked up among the shipped
     files (:func:`~pendulum_lqg.util.resources.find_file`:
-    ``experiments/lti/double_integrator.toml`` works from an installed package)."""
+    ``experiments/lti/double_integrator.toml`` works from an installed package). A plant file of a
+    MuJoCo model (a ``model`` key) is read by :func:`pendulum_lqg.model.catalog.load_plant_at`."""
+    resolved, data, where = read_plant_data(path)
+    return lti_from_mapping(data, name=resolved.name.split(".")[0], path=resolved, where=where)
+
+
+def read_plant_data(path: str | Path) -> tuple[Path, dict[str, Any], Where]:
+    """``(resolved path, its mapping, its error prefix)`` of the plant file ``path``: TOML or
+    ``.npz`` through the file boundary, a relative path not found here looked up among the
+    shipped files."""
     from pendulum_lqg.boundary import read_toml
     from pendulum_lqg.util.resources import find_file
 
@@ -523,7 +541,7 @@ def load_lti(path: str | Path) -> LTIPlant:
     where = Where(f"lti: {given}")
     data = _read_npz(resolved, where) if resolved.suffix == ".npz" else read_toml(
         resolved, where="lti")
-    return lti_from_mapping(data, name=resolved.name.split(".")[0], path=resolved, where=where)
+    return resolved, data, where
 
 
 def _read_npz(path: Path, where: Where) -> dict[str, Any]:
