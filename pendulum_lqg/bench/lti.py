@@ -81,9 +81,9 @@ def check_lti_experiment(data: dict[str, Any]) -> None:
 @functools.lru_cache(maxsize=16)
 def lti_plant(path: str) -> Any:
     """The plant of an experiment's ``lti_file`` (read once per path while a grid runs)."""
-    from pendulum_lqg.model.lti import load_lti
+    from pendulum_lqg.model.catalog import load_plant_at
 
-    return load_lti(path)
+    return load_plant_at(path)
 
 
 def lti_build(cfg: Any) -> tuple[Any, Any]:

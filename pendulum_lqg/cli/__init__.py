@@ -62,9 +62,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _dispatch(args: argparse.Namespace) -> int:
+    from pendulum_lqg.cli.parser import resolve_plant_option
     from pendulum_lqg.errors import PendulumLQGError
 
     try:
+        resolve_plant_option(args)
         return command(args.command)(args)
     except PendulumLQGError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -26,6 +26,7 @@ def scenario_from_args(args: argparse.Namespace) -> Any:
 
 def cmd_run(args: argparse.Namespace) -> int:
     from pendulum_lqg.core.metrics import summarize
+    from pendulum_lqg.model.catalog import is_cartpole
     from pendulum_lqg.model.plant import load_plant
     from pendulum_lqg.policies.loading import build_policy, is_plugin_ref, split_builtin
     from pendulum_lqg.util.limits import MAX_RECORDED_EPISODES, MAX_RUN_EPISODES, check_at_most
@@ -34,8 +35,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise cfg_error("--policy: give either --policy or --controller/--observer, not both")
     name = (args.policy if args.policy is not None   # --policy '' is refused, not the default
             else f"{args.controller or 'dlqr'}+{args.observer or 'kalman'}")
-    if args.lti is not None:                     # a plant given as matrices, the same loop
-        return _run_lti(args, name)
+    if not is_cartpole(args.plant_ref):          # a plant file (or a shipped one): the same loop
+        return _run_plant_file(args, name)
     plant = load_plant(args.model)
     scenario = scenario_from_args(args)
     plugin = is_plugin_ref(name)
@@ -82,9 +83,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_lti(args: argparse.Namespace, name: str) -> int:
-    """``run --lti FILE``: the episodes of policy ``name`` on the file's plant, and the theory;
-    with ``--plot``, the picture of one episode."""
+def _run_plant_file(args: argparse.Namespace, name: str) -> int:
+    """``run --plant NAME|FILE``: the episodes of policy ``name`` on the file's plant, and the
+    theory; with ``--plot``, the picture of one episode."""
     from pendulum_lqg.cli.lti import lti_report, lti_run_setup
 
     lti, lti_sc, lti_policy, lti_config = lti_run_setup(args, name)

@@ -14,11 +14,12 @@ from pendulum_lqg.cli.parser import jsonable, noise_from_args, spec_from_args
 def cmd_design(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from pendulum_lqg.model.catalog import is_cartpole
     from pendulum_lqg.model.plant import load_plant
     from pendulum_lqg.policies.lqg import design_all
 
-    if args.lti is not None:
-        return _design_lti(args)
+    if not is_cartpole(args.plant_ref):
+        return _design_plant_file(args)
     plant = load_plant(args.model)
     noise = noise_from_args(args)
     spec = spec_from_args(args)
@@ -150,23 +151,31 @@ def _gain_lines(d: dict[str, Any]) -> list[str]:
     return lines
 
 
-# ---- design --lti --------------------------------------------------------------------------------
-def _design_lti(args: argparse.Namespace) -> int:
-    """``design --lti FILE``: the plant, its discretisation and every design, in the layout and
-    the JSON keys of the cart-pole's ``design`` (a plant given in discrete time has no continuous
-    designs: their keys are absent)."""
+# ---- design --plant NAME|FILE ---------------------------------------------------------------------
+def _design_plant_file(args: argparse.Namespace) -> int:
+    """``design --plant NAME|FILE``: the plant, its discretisation and every design, in the
+    layout and the JSON keys of the cart-pole's ``design`` (a plant given in discrete time has no
+    continuous designs: their keys are absent; a MuJoCo plant adds MuJoCo's own discretisation,
+    ``mjd_transitionFD``, beside the exact ZOH)."""
     import numpy as np
 
     from pendulum_lqg.cli.lti import CARTPOLE_OPTIONS, refuse_cartpole_options
-    from pendulum_lqg.model.lti import load_lti
+    from pendulum_lqg.model.catalog import load_named_plant
     from pendulum_lqg.policies.lti import design_lti_all
     from pendulum_lqg.problem import defaults
 
     refuse_cartpole_options(args, {**CARTPOLE_OPTIONS,
                                    "dt": (defaults.CONTROL_PERIOD, "the file's control_period")})
-    plant = load_lti(args.lti)
+    plant = load_named_plant(args.plant_ref, what="--plant")
     d = design_lti_all(plant)
-    data = _lti_data(args.lti, plant, d)
+    data = _lti_data(args.plant_ref, plant, d)
+    fd = plant.transition_fd()
+    if fd is not None:
+        data.update(Phi_transition_fd=fd[0], Gamma_transition_fd=fd[1],
+                    zoh_vs_transition_fd_max_abs=max(float(np.max(np.abs(plant.Phi - fd[0]))),
+                                                     float(np.max(np.abs(plant.Gamma - fd[1])))),
+                    model=str(plant.mjcf), force_limit=plant.limits_per_input,
+                    state_limits=plant.state_limits, kind=plant.kind_label)
     for key in [k for k in data if k.endswith("_poles")]:
         data[key] = np.asarray(data[key], dtype=complex)      # always [re, im] pairs in JSON
     if args.json:
@@ -216,7 +225,7 @@ def _lti_data(path: str, plant: Any, d: dict[str, Any]) -> dict[str, Any]:
 def _print_lti_design(d: dict[str, Any]) -> None:
     n, m, p = len(d["states"]), len(d["inputs"]), len(d["outputs"])
     w = d["weights"]
-    lines = [f"pendulum_lqg design — LTI plant {d['plant']} ({d['lti']})",
+    lines = [f"pendulum_lqg design — {d.get('kind', 'LTI plant')} {d['plant']} ({d['lti']})",
              *([d["description"]] if d["description"] else []),
              f"state x = [{', '.join(d['states'])}], input u = [{', '.join(d['inputs'])}], "
              f"output y = [{', '.join(d['outputs'])}]; n = {n}, m = {m}, p = {p}; "

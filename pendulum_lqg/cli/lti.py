@@ -1,6 +1,7 @@
-"""``pendulum-lqg run --lti FILE``: seeded episodes of a plant given as matrices
-(:mod:`pendulum_lqg.model.lti`) through the same loop as the cart-pole, summarised with the file's
-state names."""
+"""``pendulum-lqg run --plant NAME|FILE``: seeded episodes of a plant given by a plant file — an
+MJCF model's (:mod:`pendulum_lqg.model.mjcf`) or a plant given as matrices
+(:mod:`pendulum_lqg.model.lti`) — through the same loop as the cart-pole, summarised with the
+file's state names. (``--lti FILE`` is ``--plant FILE``'s old name.)"""
 
 from __future__ import annotations
 
@@ -33,11 +34,23 @@ _RUN_ONLY = {"theta0": (defaults.X0[1], "the file's x0"),
 def refuse_cartpole_options(args: argparse.Namespace,
                             options: dict[str, tuple[Any, str]]) -> None:
     """Refuse, one line each, an option of ``options`` (``{dest: (default, what the file holds
-    instead)}``) given with ``--lti``. An option given at its default cannot be told apart from
-    one not given, and is not refused."""
+    instead)}``) given with a plant file (``--plant NAME|FILE``). An option given at its default
+    cannot be told apart from one not given, and is not refused."""
     for option, (default, why) in options.items():
         if getattr(args, option) != default:
-            raise cfg_error(f"--{option.replace('_', '-')}: not with --lti ({why})")
+            raise cfg_error(f"--{option.replace('_', '-')}: not with --plant {args.plant_ref} "
+                            f"({why})")
+
+
+def plant_simulator(args: argparse.Namespace, plant: Any) -> str:
+    """The simulator of ``run --plant``: ``--simulator`` if the plant can be stepped by it; its
+    own default when the option was left at ``mujoco`` (a matrix plant's exact sampled model)."""
+    if args.plant in plant.simulators:
+        return str(args.plant)
+    if args.plant == "mujoco":
+        return str(plant.default_simulator)
+    raise cfg_error(f"--simulator: the plant {plant.name!r} is simulated by "
+                    f"{' or '.join(plant.simulators)}, got {args.plant!r}")
 
 
 #: The scenario fields an LTI plant runs with (the others describe the cart-pole; the file holds
@@ -51,27 +64,28 @@ def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, d
     scenario, the policy and the configuration to report; ``cmd_run`` runs them."""
     from pendulum_lqg.core.layout import layout
     from pendulum_lqg.core.rules import limits
-    from pendulum_lqg.model.lti import load_lti
+    from pendulum_lqg.model.catalog import load_named_plant
     from pendulum_lqg.policies.lti import design_lti_policy, lti_scenario
     from pendulum_lqg.util.limits import MAX_RUN_EPISODES, check_at_most
 
     _check_options(args)
-    plant = load_lti(args.lti)
+    plant = load_named_plant(args.plant_ref, what="--plant")
     if not math.isclose(args.dt, plant.control_period) and args.dt != 0.01:
-        raise cfg_error(f"--dt: the LTI plant {plant.name!r} is sampled at "
+        raise cfg_error(f"--dt: the {plant.kind_label} {plant.name!r} is sampled at "
                         f"{plant.control_period:g} s (its file's control_period); leave --dt out")
     scenario = lti_scenario(plant, duration=args.duration, noise_scale=args.noise_scale,
                             estimate0=args.estimate0, force_limit=args.force_limit,
                             measurement_delay=args.measurement_delay,
                             actuator_delay=args.actuator_delay, dropout=args.dropout,
-                            actuator_tau=args.actuator_tau, burn_in=args.burn_in)
+                            actuator_tau=args.actuator_tau, burn_in=args.burn_in,
+                            simulator=plant_simulator(args, plant))
     lay = layout(plant, scenario)
     u_max = limits(cast(Any, plant), scenario)[2]        # (the core types its plants as Plant)
     policy = design_lti_policy(plant, name, u_max=u_max)
     check_at_most("--episodes", args.episodes, MAX_RUN_EPISODES,
                   "run keeps every row in memory; bench streams larger studies to disk")
     config = {"policy": name, "seed": args.seed, "episodes": args.episodes,
-              "lti": str(args.lti), "plant": plant.name, "states": list(lay.states),
+              "lti": str(args.plant_ref), "plant": plant.name, "kind": plant.kind_label, "states": list(lay.states),
               "outputs": list(lay.outputs), "x0": lay.x0.tolist(), "x0_std": lay.x0_std.tolist(),
               "force_limit": _limit(u_max),       # a switched-off limit: "inf", as in "scenario"
               "state_limits": [_limit(v) for v in np.asarray(lay.state_limits).tolist()],
@@ -113,12 +127,9 @@ def _check_options(args: argparse.Namespace) -> None:
     from pendulum_lqg.policies.loading import is_plugin_ref
 
     if args.policy is not None and is_plugin_ref(args.policy):
-        raise cfg_error("--policy: with --lti, a built-in 'controller+observer' (dlqr/lqr + "
-                        "none/kalman/kalman-predictor/luenberger); plug-ins take the cart-pole's "
-                        "PolicyContext")
-    if args.plant not in ("mujoco", "linear-zoh"):        # mujoco: the option's default
-        raise cfg_error(f"--plant: an LTI plant runs as its own exact sampled model "
-                        f"(linear-zoh), got {args.plant!r}")
+        raise cfg_error("--policy: with --plant NAME|FILE, a built-in 'controller+observer' "
+                        "(dlqr/lqr + none/kalman/kalman-predictor/luenberger); plug-ins take the "
+                        "cart-pole's PolicyContext")
     refuse_cartpole_options(args, {**CARTPOLE_OPTIONS, **_RUN_ONLY})
 
 
@@ -130,7 +141,7 @@ def _print_summary(config: dict[str, Any], scenario: Any, s: dict[str, Any],
     from pendulum_lqg.core.metrics import summary_metrics
 
     con = Console(highlight=False)
-    con.print(escape(f"{config['policy']} on the LTI plant {config['plant']} ({config['lti']}) — "
+    con.print(escape(f"{config['policy']} on the {config['kind']} {config['plant']} ({config['lti']}) — "
                      f"{s['episodes']} episodes, seed {config['seed']}, "
                      f"T = {scenario.control_period:g} s, {scenario.duration:g} s, noise scale "
                      f"{scenario.noise.scale:g}, x0 = {config['x0']}, force limit "

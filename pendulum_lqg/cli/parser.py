@@ -58,8 +58,15 @@ def add_flags(p: argparse.ArgumentParser, command: str) -> None:
 
 def _add_design_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("design")
+    g.add_argument("--plant", dest="plant_ref", default=None, metavar="NAME|FILE",
+                   help="the plant: a shipped one (cartpole, double-cartpole, …; see "
+                        "docs/family.md) or a plant file (TOML: an MJCF model's, or a plant "
+                        "given as matrices; .npz) (default: the cart-pole). The simulator words "
+                        "mujoco, linear-zoh and linear-euler are still taken here as "
+                        "--simulator, for one release")
     g.add_argument("--model", default=None, metavar="XML",
-                   help="MJCF model file (default: the bundled models/cartpole.xml)")
+                   help="the cart-pole's MJCF model file (default: the bundled "
+                        "models/cartpole.xml); any other MuJoCo model is a plant file, --plant")
     g.add_argument("--dt", type=Kind("Finite"), default=defaults.CONTROL_PERIOD, metavar="T",
                    help="control period T in seconds, a whole number (≤ 10 000) of the model's "
                         f"physics steps and at most 1 s (default {defaults.CONTROL_PERIOD:g})")
@@ -96,18 +103,18 @@ def add_theory_parser(sub: Any) -> None:
     p.add_argument("policies", nargs="*", metavar="POLICY",
                    help="built-in policies 'controller+observer' (default: the lecture study's "
                         + ", ".join(LECTURE_POLICIES) + ")")
-    p.add_argument("--plant", choices=("linear-zoh", "linear-euler"), default="linear-zoh",
-                   help="the linear plant: exact ZOH of the linearisation, or the lecture's "
+    p.add_argument("--simulator", dest="plant", choices=("linear-zoh", "linear-euler"),
+                   default="linear-zoh",
+                   help="the linear model: exact ZOH of the linearisation, or the lecture's "
                         "forward Euler at the control period (default linear-zoh)")
     p.add_argument("--lti", default=None, metavar="FILE",
-                   help="a plant given as matrices (TOML or .npz, e.g. "
-                        "experiments/lti/double_integrator.toml) instead of the cart-pole; "
-                        "policies dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
+                   help="a plant file (as --plant FILE; kept for one release); policies "
+                        "dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
                         "dlqr+none, dlqr+kalman, dlqr+luenberger)")
     add_flags(p, "theory")              # the declared settings (problem/), theory's front end
     p.add_argument("--theta0", type=Kind("Finite"), default=defaults.X0[1],
                    help=f"initial pole angle in rad of the episode the expected RMS is taken over "
-                        f"(default {defaults.X0[1]:g}, as run; not with --lti: the file's x0)")
+                        f"(default {defaults.X0[1]:g}, as run; not with a plant file: its's x0)")
     p.add_argument("--json", action="store_true",
                    help="machine-readable output: policies.NAME.{spectral_radius, stable, std, "
                         "u_std, estimate_error_std, cost_rate, episode.{rms, u_rms, "
@@ -123,10 +130,8 @@ def _add_design_parser(sub: Any) -> None:
                                    "continuous/discrete LQR, Kalman and Luenberger designs.")
     _add_design_options(p)
     p.add_argument("--lti", default=None, metavar="FILE",
-                   help="a plant given as matrices (TOML or .npz, e.g. "
-                        "experiments/lti/double_integrator.toml) instead of the cart-pole: its "
-                        "discretisation and every design on the file's weights and noise "
-                        "(default: the cart-pole)")
+                   help="a plant file (as --plant FILE; kept for one release; default: none, "
+                        "the cart-pole): its discretisation and every design on the file's weights and noise")
     p.add_argument("--json", action="store_true",
                    help="machine-readable output (matrices as nested lists, poles as [re, im])")
 
@@ -153,16 +158,14 @@ def _add_run_parser(sub: Any) -> None:
     add_flags(p, "run")                 # the declared settings (problem/), run's front end
     p.add_argument("--theta0", type=Kind("Finite"), default=defaults.X0[1],
                    help=f"initial pole angle in rad, e.g. --theta0 -0.1 (default {defaults.X0[1]:g})")
-    p.add_argument("--plant", choices=PLANTS, default="mujoco",
-                   help="the simulated plant: MuJoCo, or the model's linearisation discretised "
-                        "exactly (linear-zoh) or by the lecture's forward Euler at the control "
-                        "period (linear-euler) (default mujoco)")
+    p.add_argument("--simulator", dest="plant", choices=PLANTS, default="mujoco",
+                   help="how the plant is simulated: MuJoCo, or the model's linearisation "
+                        "discretised exactly (linear-zoh) or by the lecture's forward Euler at the "
+                        "control period (linear-euler) (default mujoco)")
     p.add_argument("--lti", default=None, metavar="FILE",
-                   help="simulate a plant given as matrices (TOML or .npz, e.g. "
-                        "experiments/lti/double_integrator.toml) instead of the cart-pole: its own "
-                        "exact sampled model, period, x0, noise, cost and limits (as theory "
-                        "--lti); policies dlqr/lqr + none/kalman/kalman-predictor/luenberger "
-                        "(default: none, the cart-pole)")
+                   help="a plant file (as --plant FILE; kept for one release; default: none): its own period, "
+                        "x0, noise, cost and limits; policies dlqr/lqr + none/kalman/"
+                        "kalman-predictor/luenberger")
     _add_sensing_options(p)
     p.add_argument("--backend", choices=("rollout", "step"), default="rollout",
                    help="batched MuJoCo (mujoco.batch) or a plain mj_step loop; bit-identical results "
@@ -299,6 +302,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+
+
+def resolve_plant_option(args: argparse.Namespace) -> None:
+    """``--plant`` after parsing: a simulator word (``mujoco``, ``linear-zoh``, ``linear-euler``,
+    its meaning before plants had names) sets ``--simulator``; ``--lti FILE`` is ``--plant FILE``.
+    Afterwards ``args.plant_ref`` is the plant's NAME or FILE (``None``: the cart-pole) and
+    ``args.plant`` the simulator."""
+    ref = getattr(args, "plant_ref", None)
+    if ref is None and getattr(args, "lti", None) is None:
+        return
+    if ref in PLANTS:
+        if ref not in ("linear-zoh", "linear-euler") and args.command == "theory":
+            raise cfg_error(f"--plant: the theory's simulator is linear-zoh or linear-euler, "
+                            f"got {ref!r}")
+        args.plant, args.plant_ref = ref, None
+        ref = None
+    lti = getattr(args, "lti", None)
+    if lti is not None:
+        if ref is not None:
+            raise cfg_error("--lti: give the plant once, --plant FILE (--lti is its old name)")
+        args.plant_ref = lti
+    args.lti = None
 
 
 # ---- helpers -------------------------------------------------------------------------------------

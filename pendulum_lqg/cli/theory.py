@@ -37,11 +37,12 @@ def declared_fields(args: argparse.Namespace, command: str) -> dict[str, Any]:
 def cmd_theory(args: argparse.Namespace) -> int:
     from pendulum_lqg.cli.parser import jsonable, noise_from_args, spec_from_args
     from pendulum_lqg.core.scenario import Scenario
+    from pendulum_lqg.model.catalog import is_cartpole
     from pendulum_lqg.model.plant import load_plant
     from pendulum_lqg.names import LECTURE_POLICIES
     from pendulum_lqg.policies.theory import lecture_theory
 
-    if args.lti is not None:
+    if not is_cartpole(args.plant_ref):
         return _lti_theory(args)
     plant = load_plant(args.model)
     scenario = Scenario(control_period=args.dt, plant=args.plant,
@@ -68,20 +69,20 @@ def cmd_theory(args: argparse.Namespace) -> int:
 def _lti_theory(args: argparse.Namespace) -> int:
     """``theory --lti FILE``: the built-in policies on a plant given as matrices."""
     from pendulum_lqg.cli.parser import jsonable
-    from pendulum_lqg.model.lti import load_lti
+    from pendulum_lqg.model.catalog import load_named_plant
     from pendulum_lqg.policies.lti import lti_theory
 
     _check_lti_options(args)
-    plant = load_lti(args.lti)
+    plant = load_named_plant(args.plant_ref, what="--plant")
     names = tuple(args.policies) or ("dlqr+none", "dlqr+kalman", "dlqr+luenberger")
     results = lti_theory(plant, names, noise_scale=args.noise_scale, duration=args.duration,
                          estimate0=args.estimate0, burn_in=args.burn_in)
     if args.json:
-        out = {"plant": plant.name, "lti": str(args.lti), "control_period": plant.control_period,
+        out = {"plant": plant.name, "lti": str(args.plant_ref), "control_period": plant.control_period,
                "policies": {name: r.to_dict() for name, r in results.items()}}
         print(json.dumps(jsonable(out), indent=2))
         return 0
-    _print_table(results, f"theory — LTI plant {plant.name} ({args.lti}), T = "
+    _print_table(results, f"theory — {plant.kind_label} {plant.name} ({args.plant_ref}), T = "
                           f"{plant.control_period:g} s, noise scale {args.noise_scale:g}, "
                           f"J over {args.duration:g} s; stationary")
     x0 = [0.0] * plant.n_states if plant.x0 is None else [float(v) for v in plant.x0]

@@ -80,16 +80,18 @@ def default_observer_z(plant: LTIPlant, K: np.ndarray) -> np.ndarray:
 
 
 def lti_scenario(plant: LTIPlant, *, duration: float = defaults.DURATION,
-                 noise_scale: float = defaults.NOISE_SCALE,
+                 noise_scale: float = defaults.NOISE_SCALE, simulator: str | None = None,
                  **fields: Any) -> Any:
-    """The :class:`~pendulum_lqg.core.scenario.Scenario` an LTI plant runs under (``run --lti``,
-    ``bench`` with ``lti_file``): its own period, the plant ``linear-zoh`` (its exact sampled
-    model), the noise ``scale`` (its W and V come from the file), and any other scenario
-    ``fields`` (``estimate0``, ``force_limit``, the delays, ``dropout``)."""
+    """The :class:`~pendulum_lqg.core.scenario.Scenario` a plant file's plant runs under (``run
+    --plant``, ``bench`` with ``plant``): its own period, the ``simulator`` (default the plant's:
+    a matrix plant's exact sampled model, a MuJoCo plant's MuJoCo), the noise ``scale`` (its W
+    and V come from the file), and any other scenario ``fields`` (``estimate0``,
+    ``force_limit``, the delays, ``dropout``)."""
     from pendulum_lqg.core.noise import NoiseModel
     from pendulum_lqg.core.scenario import Scenario
 
-    return Scenario(control_period=plant.control_period, duration=duration, plant="linear-zoh",
+    return Scenario(control_period=plant.control_period, duration=duration,
+                    plant=simulator or plant.default_simulator,
                     noise=NoiseModel(scale=noise_scale), **fields)
 
 
@@ -120,10 +122,15 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
     x0 = np.zeros(plant.n_states) if plant.x0 is None else plant.x0
     x0_std = np.zeros(plant.n_states) if plant.x0_std is None else plant.x0_std
     out = {}
+    # the loop as it is simulated: k physics steps of h per period (an LTI plant: k = 1, h = T;
+    # a MuJoCo plant: its physics step), the cost integrated at h as the simulation does
+    h = plant.timestep
+    k = round(plant.control_period / h)
+    Phi_h, Gamma_h = plant.sampled(h)
     for name in names:
         policy = design_lti_policy(plant, name)
-        prob = StationaryProblem(kind="linear-zoh", Phi=plant.Phi, Gamma=plant.Gamma, k=1,
-                                 h=plant.control_period, C=plant.C, K=policy.K,
+        prob = StationaryProblem(kind="linear-zoh", Phi=Phi_h, Gamma=Gamma_h, k=k,
+                                 h=h, C=plant.C, K=policy.K,
                                  estimator=linear_estimator(policy),
                                  Wd=plant.process_covariance() * s2, V=plant.V * s2,
                                  Q=plant.Q, R=plant.R, N=plant.cross_weight,

@@ -61,10 +61,11 @@ class LTISuite:
     designed_on: str = DESIGNED_ON_LTI
 
     def plant(self) -> Any:
-        """The suite's plant (:func:`~pendulum_lqg.model.lti.load_lti`)."""
-        from pendulum_lqg.model.lti import load_lti
+        """The suite's plant (:func:`~pendulum_lqg.model.catalog.load_plant_at`: matrices or a
+        MuJoCo model)."""
+        from pendulum_lqg.model.catalog import load_plant_at
 
-        return load_lti(self.lti_file)
+        return load_plant_at(self.lti_file)
 
     def fingerprint(self) -> str:
         """sha256 of what decides the episodes: the definition and the plant file's bytes."""

@@ -125,8 +125,8 @@ def test_theory_lti_refuses_cartpole_options(capsys, option):
     """Issue 45: ``theory --lti`` ignored the cart-pole's options; now each is refused by name."""
     assert main(["theory", "--lti", DI, *option]) == 2
     err = capsys.readouterr().err
-    assert err.strip() == f"error: {option[0]}: not with --lti" + err.strip().split(
-        "not with --lti")[1] and "Traceback" not in err
+    assert err.strip() == f"error: {option[0]}: not with --plant" + err.strip().split(
+        "not with --plant")[1] and "Traceback" not in err
 
 
 @pytest.mark.parametrize("lti", [[], ["--lti", DI]])

@@ -128,10 +128,10 @@ def test_run_cli_on_the_double_integrator_gives_run_episodes_rows(capsys):
 
 
 @pytest.mark.parametrize("extra, message", [
-    (["--theta0", "0.2"], "--theta0: not with --lti"),
-    (["--record", "x.rrd"], "--record: not with --lti"),
-    (["--plant", "linear-euler"], "--plant: an LTI plant runs"),
-    (["--policy", "plug.py:make"], "--policy: with --lti, a built-in"),
+    (["--theta0", "0.2"], "--theta0: not with --plant"),
+    (["--record", "x.rrd"], "--record: not with --plant"),
+    (["--plant", "linear-euler"], "--simulator: the plant 'double_integrator' is simulated by linear-zoh"),
+    (["--policy", "plug.py:make"], "--policy: with --plant NAME|FILE, a built-in"),
     (["--dt", "0.05"], "--dt: the LTI plant 'double_integrator' is sampled at 0.01 s"),
 ])
 def test_run_cli_refuses_the_cartpoles_options_with_lti(capsys, extra, message):
@@ -221,7 +221,7 @@ def test_design_lti_of_a_discrete_plant_has_only_the_discrete_designs(capsys):
 def test_design_lti_refuses_the_cartpoles_options(capsys, extra):
     path = str(EXPERIMENTS / "double_integrator.toml")
     assert main(["design", "--lti", path, *extra]) == 2
-    assert f"{extra[0]}: not with --lti" in capsys.readouterr().err
+    assert f"{extra[0]}: not with --plant" in capsys.readouterr().err
 
 
 # ---- pictures of any plant ----------------------------------------------------------------------
