@@ -74,7 +74,7 @@ if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
 
 TOP_KEYS = ("name", "description", "episodes", "seed", "chunk", "model_file", "scenario", "noise",
-            "design", "model", "grid", "study", "margins", "roa", "lti_file")
+            "design", "model", "grid", "study", "margins", "roa", "plant", "lti_file")
 #: Analysis studies that are not plain grids: ``study = "NAME"`` plus an optional ``[NAME]`` table of
 #: its parameters; the grid still defines the configurations the study runs on
 #: (see :mod:`pendulum_lqg.analysis.studies`).
@@ -360,14 +360,14 @@ def parse_spec(data: dict[str, Any], *, name: str = "experiment",
     ``base_dir`` is the folder relative plugin files (``policy = ["my_ctrl.py:make"]``) are taken
     from: the experiment file's own folder (then the current folder).
     """
-    from pendulum_lqg.bench.lti import check_lti_experiment, lti_file
+    from pendulum_lqg.bench.lti import check_lti_experiment, plant_key
     from pendulum_lqg.util.limits import MAX_BATCH_EPISODES, check_at_most
 
     base = _checked_tables(data)
     grid = _checked_grid(data.get("grid", {}))
     study, study_params = _study(data)
     model_file = _model_file(data.get("model_file"), base_dir)
-    lti = lti_file(data.get("lti_file"), base_dir)
+    lti = plant_key(data, base_dir)
     if lti is not None:
         check_lti_experiment(data)
     episodes, seed, chunk = (check(d.name, data.get(d.name, d.default), d.type)

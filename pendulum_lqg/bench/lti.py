@@ -55,6 +55,26 @@ def lti_file(value: object, base_dir: Path | None) -> str | None:
     return str(path)
 
 
+def plant_key(data: dict[str, Any], base_dir: Path | None) -> str | None:
+    """The plant file of an experiment as an absolute path, ``None`` for the cart-pole: its
+    ``plant`` (a shipped NAME or a plant FILE, :mod:`pendulum_lqg.model.catalog`) or the alias
+    ``lti_file`` (kept one release), not both."""
+    from pendulum_lqg.model.catalog import is_cartpole, plant_path, shipped_plants
+
+    if "plant" not in data:
+        return lti_file(data.get("lti_file"), base_dir)
+    if "lti_file" in data:
+        raise ConfigError("lti_file: not with plant (lti_file is the old name of plant)")
+    value = data["plant"]
+    if not isinstance(value, str) or not value.strip():
+        raise ConfigError(f"plant: expected a plant name or a plant file, got {value!r}")
+    if is_cartpole(value):
+        return None
+    if value.replace("_", "-") in shipped_plants() and Path(value).suffix == "":
+        return str(plant_path(value))
+    return lti_file(value, base_dir)
+
+
 def check_lti_experiment(data: dict[str, Any]) -> None:
     """Refuse what an experiment on an LTI plant cannot set, one line naming the key."""
     for key in ("model_file", "study"):
