@@ -72,13 +72,21 @@ class LQGAgent:
         if design_model not in ("nominal", "simulated"):
             raise ConfigError(f"design_model: expected 'nominal' or 'simulated', got "
                               f"{design_model!r}")
-        plant = base.plant
-        if design_model == "nominal" and not plant.overrides.is_empty():
-            plant = load_plant(plant.path)
         scenario = base.scenario
         self.spec = spec
-        self.policy: Policy = design_policy(plant, scenario.control_period, scenario.noise, spec,
-                                            delays=delay_periods(scenario))
+        self.policy: Policy
+        if base.config.plant_file is not None:       # a plant file: its own weights and noise
+            from pendulum_lqg.policies.lti import design_lti_policy
+
+            self.policy = design_lti_policy(base.config.plant_file,
+                                            f"{spec.controller}+{spec.observer}",
+                                            u_max=base.action_map.hi)
+        else:
+            plant = base.plant
+            if design_model == "nominal" and not plant.overrides.is_empty():
+                plant = load_plant(plant.path)
+            self.policy = design_policy(plant, scenario.control_period, scenario.noise, spec,
+                                        delays=delay_periods(scenario))
         wants = "state" if self.policy.needs_state else "measurement"
         if base.observation_mode != wants:
             raise ConfigError(f"observer: {spec.observer!r} needs observation_mode={wants!r}, "
@@ -87,7 +95,13 @@ class LQGAgent:
         self._actions = base.action_map
         self.vector = isinstance(base, CartPoleLQGVectorEnv)
         self.num_envs = base.num_envs if isinstance(base, CartPoleLQGVectorEnv) else 1
-        self._obs_dim = 4 if wants == "state" else 2
+        space = (base.single_observation_space if isinstance(base, CartPoleLQGVectorEnv)
+                 else base.observation_space)
+        assert space.shape is not None
+        self._obs_dim = int(space.shape[0])
+        #: the estimate's size (the plant's states)
+        self._n = (int(base.config.plant_file.n_states) if base.config.plant_file is not None
+                   else 4)
 
     @property
     def name(self) -> str:
@@ -103,15 +117,15 @@ class LQGAgent:
         x_hat0 : initial estimate (4,) or (len(rows), 4), e.g. ``info["state"]`` for a known x₀
         """
         if rows is None:
-            x0 = np.zeros((self.num_envs, 4)) if x_hat0 is None else \
-                np.broadcast_to(np.asarray(x_hat0, dtype=float), (self.num_envs, 4)).copy()
+            x0 = np.zeros((self.num_envs, self._n)) if x_hat0 is None else \
+                np.broadcast_to(np.asarray(x_hat0, dtype=float), (self.num_envs, self._n)).copy()
             self.policy.reset(self.num_envs, x0)
             return
         rows = np.asarray(rows, dtype=np.int64).reshape(-1)
         if rows.size == 0:
             return
-        x0 = np.zeros((rows.size, 4)) if x_hat0 is None else \
-            np.broadcast_to(np.asarray(x_hat0, dtype=float), (rows.size, 4)).copy()
+        x0 = np.zeros((rows.size, self._n)) if x_hat0 is None else \
+            np.broadcast_to(np.asarray(x_hat0, dtype=float), (rows.size, self._n)).copy()
         self.policy.estimator.reset(x0, rows=rows)
 
     def act(self, observation: np.ndarray) -> np.ndarray:

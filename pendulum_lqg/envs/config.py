@@ -73,6 +73,8 @@ class EnvConfig:
     observation_mode: ObservationMode
     reward_scale: float
     model_path: str | None
+    #: the plant of a plant file (``plant`` keyword), ``None`` for the cart-pole
+    plant_file: Any = None
 
     @classmethod
     def from_keywords(cls, keywords: Mapping[str, Any]) -> EnvConfig:
@@ -91,8 +93,15 @@ class EnvConfig:
             raise ConfigError(f"{unknown[0]}: not a keyword of the environment; known: "
                               f"{', '.join(known)}, and normalize_action, render_mode, width, "
                               "height")
-        own = {d.name: coerce(d, given.pop(d.name, d.default)) if d.name != "model_overrides"
-               else given.pop(d.name, None) for d in declared(EnvSettings)}
+        explicit = set(given)
+        own = {d.name: coerce(d, given.pop(d.name, d.default))
+               if d.name not in ("model_overrides", "plant") else given.pop(d.name, None)
+               for d in declared(EnvSettings)}
+        simulator, plant_ref = _plant_keywords(own["plant"], own["simulator"])
+        if plant_ref is not None:
+            return cls._of_plant_file(plant_ref, simulator, given, own, explicit)
+        if simulator is not None:
+            given["plant"] = simulator
         if own["process_density"] is None and own["process_noise"] == "force":
             raise ConfigError("process_density: required with process_noise='force' "
                               "(2 densities, [N²·s, N²m²·s])")
@@ -105,11 +114,69 @@ class EnvConfig:
         return cls(scenario=scenario, observation_mode=own["observation_mode"],
                    reward_scale=own["reward_scale"], model_path=own["model_path"])
 
+    @classmethod
+    def _of_plant_file(cls, ref: str, simulator: str | None, given: dict[str, Any],
+                       own: dict[str, Any], explicit: set[str]) -> EnvConfig:
+        """The configuration on a plant file's plant: the file holds the period, x0, the noise,
+        the cost and the limits; a keyword for any of them is refused, one line naming it."""
+        from pendulum_lqg.model.catalog import load_named_plant
+        from pendulum_lqg.policies.lti import lti_scenario
+
+        for key in (*_PLANT_FILE_HOLDS, *given):
+            if key in explicit and key not in _PLANT_FILE_TAKES:
+                raise ConfigError(f"{key}: not with plant={ref!r} (its plant file holds it); "
+                                  f"the env takes " + ", ".join(_PLANT_FILE_TAKES)
+                                  + ", observation_mode, reward_scale, noise_scale, simulator")
+        plant = load_named_plant(ref, what="plant")
+        if len(plant.input_names) != 1:
+            raise ConfigError(f"plant: the environments take one input, the plant {ref!r} has "
+                              f"{len(plant.input_names)}")
+        if simulator is not None and simulator not in plant.simulators:
+            raise ConfigError(f"simulator: the plant {ref!r} is simulated by "
+                              f"{' or '.join(plant.simulators)}, got {simulator!r}")
+        scenario = lti_scenario(plant, noise_scale=own["noise_scale"], simulator=simulator,
+                                **{k: v for k, v in given.items() if k in _PLANT_FILE_TAKES})
+        return cls(scenario=scenario, observation_mode=own["observation_mode"],
+                   reward_scale=own["reward_scale"], model_path=None, plant_file=plant)
+
     def make_simulator(self, *, nthread: int | None) -> tuple[Plant, Simulator]:
+        if self.plant_file is not None:
+            sim = Simulator(self.plant_file, self.scenario, backend="rollout", nthread=nthread,
+                            streamed_metrics=False)
+            return self.plant_file, sim
         plant = load_plant(self.model_path, overrides=self.scenario.overrides)
         sim = Simulator(plant, self.scenario, backend="rollout", nthread=nthread,
                         streamed_metrics=False)
         return plant, sim
+
+
+#: What an env on a plant file may set (the scenario's choices beside the file).
+_PLANT_FILE_TAKES = ("duration", "force_limit", "measurement_delay", "actuator_delay", "dropout",
+                     "actuator_tau")
+#: The env's own keywords a plant file holds (refused with it).
+_PLANT_FILE_HOLDS = ("process_noise", "process_density", "measurement_variance",
+                     "model_overrides", "model_path", "randomize")
+#: The words the ``plant`` keyword took before it named plants: the simulator (one release).
+_SIMULATOR_WORDS = ("mujoco", "linear-zoh", "linear-euler")
+
+
+def _plant_keywords(plant: object, simulator: str | None) -> tuple[str | None, str | None]:
+    """``(simulator, plant reference)`` of the ``plant`` and ``simulator`` keywords: ``plant``
+    names a shipped plant or a plant file (``None``: the cart-pole), or, kept one release, the
+    simulator."""
+    from pendulum_lqg.model.catalog import is_cartpole
+
+    if plant is None or (isinstance(plant, str) and is_cartpole(plant)):
+        return simulator, None
+    if not isinstance(plant, str) or not plant.strip():
+        raise ConfigError(f"plant: expected a plant name or a plant file (.toml, .npz), got "
+                          f"{plant!r}")
+    if plant in _SIMULATOR_WORDS:
+        if simulator is not None and simulator != plant:
+            raise ConfigError(f"plant: {plant!r} names the simulator, as simulator={simulator!r} "
+                              f"does; give one")
+        return plant, None
+    return simulator, plant
 
 
 @overload
@@ -165,6 +232,13 @@ def _action_force(action: object, n: int) -> np.ndarray:
     if not np.all(np.isfinite(u)):
         raise PendulumLQGError(f"action: expected finite forces, got {u!r}")
     return u
+
+
+def true_outputs(sim: Simulator, x: np.ndarray) -> np.ndarray:
+    """The noise-free outputs ``y = C x`` of states ``x`` (one or a batch), a new array: the
+    cart-pole's measured states ``[p, θ]`` themselves (its layout has no C), else ``x Cᵀ``."""
+    C = sim.layout.C
+    return x[..., :sim.layout.p].copy() if C is None else x @ C.T
 
 
 def _short(value: object) -> str:

@@ -28,7 +28,6 @@ class EnvKeywords(TypedDict, total=False):
     actuator_delay: float
     dropout: float
     actuator_tau: float
-    plant: Literal['mujoco', 'linear-zoh', 'linear-euler']
     observation_mode: Literal['measurement', 'state']
     noise_scale: float
     process_noise: Literal['state', 'force']
@@ -36,5 +35,7 @@ class EnvKeywords(TypedDict, total=False):
     measurement_variance: float | Sequence[float]
     reward_scale: float
     model_overrides: Mapping[str, float] | None
+    plant: str | None
+    simulator: Literal['mujoco', 'linear-zoh', 'linear-euler'] | None
     model_path: str | None
     randomize: Mapping[str, Sequence[float]] | None

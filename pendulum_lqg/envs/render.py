@@ -1,4 +1,5 @@
-"""Offscreen frames of the cart-pole for the environments' ``render()``."""
+"""Offscreen frames of a plant for the environments' ``render()``: the cart-pole from its side
+camera, any other MuJoCo plant from a camera tracking its first body."""
 
 from __future__ import annotations
 
@@ -20,26 +21,37 @@ CAMERA_DISTANCE_POLE_LENGTHS = 3.0
 class Frames:
     """Offscreen frames of the cart-pole at given states: a side view tracking the cart."""
 
-    def __init__(self, plant: Plant, width: int, height: int) -> None:
+    def __init__(self, plant: Any, width: int, height: int) -> None:
         self.plant, self.width, self.height = plant, width, height
         self._renderer: mujoco.Renderer | None = None
         self._data: mujoco.MjData | None = None
         self._camera: mujoco.MjvCamera | None = None
 
     def frame(self, x: np.ndarray) -> np.ndarray:
-        """An RGB image (height, width, 3) uint8 of the state ``x = [p, θ, ṗ, θ̇]``."""
+        """An RGB image (height, width, 3) uint8 of the plant's state ``x``."""
         model = self.plant.model
+        cartpole = isinstance(self.plant, Plant)
         if self._renderer is None:
             self._renderer = make_renderer(model, self.height, self.width)
             self._data = mujoco.MjData(model)
             cam = mujoco.MjvCamera()
             cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
-            cam.trackbodyid = model.body(CART_BODY).id
-            cam.distance = CAMERA_DISTANCE_POLE_LENGTHS * self.plant.pole_length
+            if cartpole:
+                cam.trackbodyid = model.body(CART_BODY).id
+                cam.distance = CAMERA_DISTANCE_POLE_LENGTHS * self.plant.pole_length
+            else:               # the first body below the world, the model's extent away
+                cam.trackbodyid = 1 if model.nbody > 1 else 0
+                cam.distance = 2.0 * float(model.stat.extent)
             cam.azimuth, cam.elevation = 90.0, -10.0      # from −y, x to the right: a side view
             self._camera = cam
         assert self._data is not None
-        self.plant.set_state(self._data, x)
+        if cartpole:
+            self.plant.set_state(self._data, x)
+        else:                       # x = [q − q*, q̇] of the plant's joints
+            nq = len(self.plant.qpos_index)
+            self._data.qpos[self.plant.qpos_index] = self.plant.joints.qpos_eq + x[:nq]
+            self._data.qvel[self.plant.qvel_index] = x[nq:]
+            mujoco.mj_forward(model, self._data)
         self._renderer.update_scene(self._data, camera=self._camera)
         return self._renderer.render()
 
@@ -67,8 +79,17 @@ def make_renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Rend
             "is imported first)") from exc
 
 
-def image_size(plant: Plant, width: int, height: int) -> tuple[int, int]:
+def check_renderable(plant: Any, render_mode: str | None) -> None:
+    """Refuse ``render_mode="rgb_array"`` for a plant without a MuJoCo model (one line)."""
+    if render_mode is not None and getattr(plant, "model", None) is None:
+        raise ConfigError(f"render_mode: the plant {plant.name!r} is given as matrices and has "
+                          f"no scene to draw; use render_mode=None")
+
+
+def image_size(plant: Any, width: int, height: int) -> tuple[int, int]:
     width, height = positive_int("width", width), positive_int("height", height)
+    if getattr(plant, "model", None) is None:        # a plant given as matrices: nothing to draw
+        return width, height
     vis = plant.model.vis.global_
     for name, value, limit, attr in (("width", width, vis.offwidth, "offwidth"),
                                      ("height", height, vis.offheight, "offheight")):

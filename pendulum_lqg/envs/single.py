@@ -10,9 +10,9 @@ from gymnasium import spaces
 from gymnasium.wrappers import TimeLimit
 
 from pendulum_lqg.core.rules import FAIL_NONE, FAIL_REASONS
-from pendulum_lqg.envs.config import Actions, EnvConfig, step_reward
+from pendulum_lqg.envs.config import Actions, EnvConfig, step_reward, true_outputs
 from pendulum_lqg.envs.keywords import EnvKeywords
-from pendulum_lqg.envs.render import Frames, image_size
+from pendulum_lqg.envs.render import Frames, check_renderable, image_size
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 
 
@@ -164,6 +164,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         self.scenario = self.config.scenario
         self.observation_mode = self.config.observation_mode
         self.plant, self._sim = self.config.make_simulator(nthread=0)
+        check_renderable(self.plant, render_mode)
         self.width, self.height = image_size(self.plant, width, height)
         self._actions = Actions(self._sim.u_max, normalize_action)
         self._frames = Frames(self.plant, self.width, self.height)
@@ -173,7 +174,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
         self._scale_dt = self.config.reward_scale * self.dt
         self.metadata = {**type(self).metadata, "render_fps": round(1.0 / self.dt)}
         self.action_space = self._actions.space
-        dim = 2 if self.observation_mode == "measurement" else 4
+        dim = self._sim.layout.p if self.observation_mode == "measurement" else self._sim.nx
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(dim,), dtype=np.float64)
         self._running_cost = 0.0
         self._ended = False
@@ -222,12 +223,13 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _noise_free_observation(self) -> np.ndarray:
         x = self._sim.x[0]
-        return (x[:2] if self.observation_mode == "measurement" else x).copy()
+        return true_outputs(self._sim, x) if self.observation_mode == "measurement" \
+            else x.copy()
 
     def _info(self, cost: float, reason: int, force: float) -> dict[str, Any]:
         state = self._sim.x[0].copy()
         return {"cost": cost, "running_cost": self._running_cost, "state": state,
-                "y_true": state[:2], "failure_reason": FAIL_REASONS[reason],
+                "y_true": true_outputs(self._sim, state), "failure_reason": FAIL_REASONS[reason],
                 "time": self._sim.t.item(0), "force": force}
 
     @property
@@ -252,7 +254,7 @@ class CartPoleLQGEnv(gym.Env[np.ndarray, np.ndarray]):
             gym.logger.warn("render: called without a render_mode; make the env with "
                             "render_mode='rgb_array'")
             return None
-        x = self._sim.x[0] if hasattr(self._sim, "x") else np.zeros(4)
+        x = self._sim.x[0] if hasattr(self._sim, "x") else np.zeros(self._sim.nx)
         return self._frames.frame(x)
 
     def close(self) -> None:

@@ -14,9 +14,9 @@ from gymnasium.vector.utils import batch_space
 
 from pendulum_lqg.core.loop import StepResult
 from pendulum_lqg.core.rules import FAIL_NONE, FAIL_REASONS
-from pendulum_lqg.envs.config import Actions, EnvConfig, positive_int, step_reward
+from pendulum_lqg.envs.config import Actions, EnvConfig, positive_int, step_reward, true_outputs
 from pendulum_lqg.envs.keywords import EnvKeywords
-from pendulum_lqg.envs.render import Frames, image_size
+from pendulum_lqg.envs.render import Frames, check_renderable, image_size
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
 from pendulum_lqg.util.limits import MAX_NUM_ENVS, check_at_most
 
@@ -84,6 +84,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
         self.scenario = self.config.scenario
         self.observation_mode = self.config.observation_mode
         self.plant, self._sim = self.config.make_simulator(nthread=nthread)
+        check_renderable(self.plant, render_mode)
         width, height = image_size(self.plant, width, height)
         self._frames = Frames(self.plant, width, height)
         self.dt, self.frame_skip = self._sim.dt, self._sim.k
@@ -98,7 +99,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
                          "autoreset_mode": self.autoreset_mode}
         self._actions = Actions(self._sim.u_max, normalize_action)
         self.single_action_space = self._actions.space
-        dim = 2 if self.observation_mode == "measurement" else 4
+        dim = self._sim.layout.p if self.observation_mode == "measurement" else self._sim.nx
         self.single_observation_space = spaces.Box(-np.inf, np.inf, shape=(dim,),
                                                    dtype=np.float64)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -225,7 +226,8 @@ class CartPoleLQGVectorEnv(VectorEnv):
         if measured.size:
             self._obs[measured] = self._observe(measured)
         x = sim.x
-        self._obs[failed] = x[failed, :2] if self.observation_mode == "measurement" else x[failed]
+        self._obs[failed] = (true_outputs(self._sim, x[failed])
+                             if self.observation_mode == "measurement" else x[failed])
         if waiting.size:
             self._restart(waiting)
             self._waiting[waiting] = False
@@ -257,7 +259,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
             state = sim.x.copy()
             values = {"cost": np.array(cost, dtype=float),
                       "running_cost": self._running_cost.copy(), "state": state,
-                      "y_true": state[:, :2].copy(), "failure_reason": _REASON_NAMES[reason],
+                      "y_true": true_outputs(self._sim, state), "failure_reason": _REASON_NAMES[reason],
                       "time": sim.t.copy(), "force": np.array(force, dtype=float)}
         else:
             def spread(values: np.ndarray, fill: object = 0.0, dtype: Any = float) -> np.ndarray:
@@ -270,7 +272,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
             state = spread(sim.x[rows])
             values = {
                 "cost": spread(cost), "running_cost": spread(self._running_cost[rows]),
-                "state": state, "y_true": state[:, :2].copy(),
+                "state": state, "y_true": true_outputs(self._sim, state),
                 "failure_reason": spread(_REASON_NAMES[reason], None, object),
                 "time": spread(sim.t[rows]), "force": spread(force)}
         out: dict[str, Any] = {}
@@ -285,7 +287,7 @@ class CartPoleLQGVectorEnv(VectorEnv):
             gym.logger.warn("render: called without a render_mode; make the env with "
                             "render_mode='rgb_array'")
             return None
-        x = self._sim.x if self._started else np.zeros((self.num_envs, 4))
+        x = self._sim.x if self._started else np.zeros((self.num_envs, self._sim.nx))
         return tuple(self._frames.frame(x[i]) for i in range(self.num_envs))
 
     def close_extras(self, **kwargs: Any) -> None:

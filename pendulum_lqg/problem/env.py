@@ -44,6 +44,14 @@ class EnvSettings(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown_fiel
     model_overrides: Annotated[dict[str, float] | None, setting(
         "changes of the simulated plant (model mismatch): pole_mass, cart_mass [kg], "
         "pole_length [m], their *_scale, force_limit [N], timestep [s]", fronts=_ENV)] = None
+    plant: Annotated[str | None, setting(
+        "the plant: a shipped NAME (cartpole, double-cartpole) or a plant FILE, whose file holds "
+        "its period, x0, noise, cost and limits (default: the cart-pole); kept one release: "
+        "'mujoco', 'linear-zoh' or 'linear-euler' name the simulator", fronts=_ENV)] = None
+    simulator: Annotated[Literal["mujoco", "linear-zoh", "linear-euler"] | None, setting(
+        "how the plant is simulated: MuJoCo, or its linearisation discretised exactly (ZOH) or by "
+        "forward Euler (default: MuJoCo for a MuJoCo model, ZOH for matrices)",
+        fronts=_ENV)] = None
     model_path: Annotated[str | None, setting(
         "another cart-pole MJCF (default: the shipped model)", fronts=_ENV)] = None
     randomize: Annotated[dict[str, tuple[float, float]] | None, setting(

@@ -83,7 +83,7 @@ class ScenarioSettings(msgspec.Struct, frozen=True, kw_only=True, forbid_unknown
         fronts=("env", "file", "run"), grid=True)] = 0.0
     plant: Annotated[Plant, setting(
         "how the plant is simulated: MuJoCo, or the linearisation discretised exactly (ZOH) or "
-        "by forward Euler", fronts=("env", "file"), grid=True)] = "mujoco"
+        "by forward Euler", fronts=("file",), grid=True)] = "mujoco"
     burn_in: Annotated[NonNegative, setting(
         "seconds at the start of an episode left out of the RMS metrics", unit="s",
         metavar="SECONDS", fronts=("file", "run", "theory"))] = 0.0

@@ -12,6 +12,7 @@ from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.seeding import episode_seed
 from pendulum_lqg.envs.agent import LQGAgent
 from pendulum_lqg.policies.lqg import DesignSpec, design_policy
+from pendulum_lqg.policies.lti import design_lti_policy
 
 SEED, EPISODES = 5, 6
 
@@ -53,11 +54,17 @@ def _vector(kwargs: dict) -> list[tuple[bool, float, str, float]]:
 @pytest.mark.parametrize("kwargs", [
     {"duration": 3.0},
     {"duration": 2.0, "noise_scale": 6.0, "x0_std": (0.2, 0.1, 0.0, 0.0)},     # some fail
+    {"plant": "double-cartpole", "duration": 2.0},                   # a plant file's plant
+    {"plant": "double-cartpole", "duration": 2.0, "noise_scale": 8.0},          # some fail
 ])
 def test_batch_single_env_and_vector_env_give_the_same_rows(kwargs):
     env = gym.make(pendulum_lqg.ENV_ID, **kwargs).unwrapped
-    policy = design_policy(env.plant, env.scenario.control_period, env.scenario.noise,
-                           DesignSpec("dlqr", "kalman"))
+    if env.config.plant_file is not None:
+        policy = design_lti_policy(env.config.plant_file, "dlqr+kalman",
+                                   u_max=env.action_map.hi)
+    else:
+        policy = design_policy(env.plant, env.scenario.control_period, env.scenario.noise,
+                               DesignSpec("dlqr", "kalman"))
     batch = [(r["success"], r["cost"], r["failure_reason"],
               r["duration"] if r["success"] else r["time_to_failure"])
              for r in run_episodes(env.plant, env.scenario, policy, seed=SEED,
