@@ -85,7 +85,8 @@ def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, d
     check_at_most("--episodes", args.episodes, MAX_RUN_EPISODES,
                   "run keeps every row in memory; bench streams larger studies to disk")
     config = {"policy": name, "seed": args.seed, "episodes": args.episodes,
-              "lti": str(args.plant_ref), "plant": plant.name, "kind": plant.kind_label, "states": list(lay.states),
+              "lti": str(args.plant_ref), "plant": plant.name, "kind": plant.kind_label,
+              "states": list(lay.states),
               "outputs": list(lay.outputs), "x0": lay.x0.tolist(), "x0_std": lay.x0_std.tolist(),
               "force_limit": _limit(u_max),       # a switched-off limit: "inf", as in "scenario"
               "state_limits": [_limit(v) for v in np.asarray(lay.state_limits).tolist()],

@@ -163,7 +163,8 @@ def _add_run_parser(sub: Any) -> None:
                         "discretised exactly (linear-zoh) or by the lecture's forward Euler at the "
                         "control period (linear-euler) (default mujoco)")
     p.add_argument("--lti", default=None, metavar="FILE",
-                   help="a plant file (as --plant FILE; kept for one release; default: none): its own period, "
+                   help="a plant file (as --plant FILE; kept for one release; default: none): "
+                        "its own period, "
                         "x0, noise, cost and limits; policies dlqr/lqr + none/kalman/"
                         "kalman-predictor/luenberger")
     _add_sensing_options(p)

@@ -52,7 +52,7 @@ import math
 import zipfile
 from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -122,7 +122,7 @@ class LTIPlant:
 
     #: What the simulation core asks a plant (:mod:`pendulum_lqg.model.interface`): an LTI plant
     #: is stepped by its own (Φ, Γ) once per control period (no MuJoCo model, no track).
-    simulators = ("linear-zoh",)
+    simulators: ClassVar[tuple[str, ...]] = ("linear-zoh",)
     #: The simulator a scenario of this plant uses unless it says otherwise.
     default_simulator = "linear-zoh"
     #: What the command line calls it.

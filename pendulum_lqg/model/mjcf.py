@@ -32,7 +32,7 @@ import hashlib
 import math
 from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import mujoco
 import numpy as np
@@ -44,8 +44,8 @@ from pendulum_lqg.model.lti import LTI_KEYS, LTIPlant, lti_from_mapping
 from pendulum_lqg.model.mjcf_linear import JointMap, continuous_model, residual, transition_model
 
 #: The keys of a plant file: a matrix plant's, with the model in place of its matrices.
-PLANT_FILE_KEYS = tuple(k for k in LTI_KEYS if k not in ("A", "B", "C", "G", "Phi", "Gamma",
-                                                         "Wd")) + ("model", "equilibrium")
+PLANT_FILE_KEYS = (*(k for k in LTI_KEYS if k not in ("A", "B", "C", "G", "Phi", "Gamma", "Wd")),
+                   "model", "equilibrium")
 #: Largest ``max |q̈|`` at the equilibrium [unit/s²] (finite differences of a true equilibrium
 #: leave round-off only).
 EQUILIBRIUM_TOLERANCE = 1e-8
@@ -69,7 +69,7 @@ class MjcfPlant(LTIPlant):
     equilibrium: str = ""
 
     #: MuJoCo itself, or the linearisation stepped in numpy.
-    simulators = ("mujoco", "linear-zoh", "linear-euler")
+    simulators: ClassVar[tuple[str, ...]] = ("mujoco", "linear-zoh", "linear-euler")
     #: The simulator a scenario of this plant uses unless it says otherwise.
     default_simulator = "mujoco"
     kind_label = "MuJoCo plant"

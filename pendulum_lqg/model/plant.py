@@ -265,7 +265,10 @@ class Plant:
                            (mujoco.mjtObj.mjOBJ_BODY, CART_BODY),
                            (mujoco.mjtObj.mjOBJ_BODY, POLE_BODY)):
             if mujoco.mj_name2id(m, kind, name) < 0:
-                raise ConfigError(f"model: {self.path} has no {kind.name[6:].lower()} named {name!r}")
+                raise ConfigError(f"model: {self.path} has no {kind.name[6:].lower()} named "
+                                  f"{name!r} (the cart-pole's contract, docs/model.md); any "
+                                  f"other MuJoCo model is a plant of its own: --plant FILE.toml "
+                                  f"(docs/family.md)")
         if m.nu != 1:
             raise ConfigError(f"model: {self.path}: expected exactly one actuator, found {m.nu}")
         if m.njnt != 2 or m.nq != 2 or m.nv != 2:

@@ -3,7 +3,7 @@ the scenario it runs under and its stationary closed loop (:mod:`pendulum_lqg.po
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -91,7 +91,7 @@ def lti_scenario(plant: LTIPlant, *, duration: float = defaults.DURATION,
     from pendulum_lqg.core.scenario import Scenario
 
     return Scenario(control_period=plant.control_period, duration=duration,
-                    plant=simulator or plant.default_simulator,
+                    plant=cast(Any, simulator or plant.default_simulator),   # checked there
                     noise=NoiseModel(scale=noise_scale), **fields)
 
 
@@ -136,12 +136,23 @@ def lti_theory(plant: LTIPlant, names: tuple[str, ...] = ("dlqr+kalman", "dlqr+l
                                  Q=plant.Q, R=plant.R, N=plant.cross_weight,
                                  inputs=tuple(plant.input_names))
         out[name] = stationary(prob, name=name, duration=duration,
-                               limits={"force_limit": plant.force_limit},
+                               limits={"force_limit": plant.force_limit,
+                                       **_state_limits(plant)},
                                state_names=plant.state_names,
                                units=("",) * plant.n_states,
                                start=episode_start(x0, x0_std, estimate0, policy),
                                burn_in=burn_in)
     return out
+
+
+def _state_limits(plant: LTIPlant) -> dict[str, float]:
+    """``{"limit_<state>": |x_i| limit}`` of each state the plant file limits (the failure rule
+    of its ``state_limits``; the verdict sets each state's std against its own limit)."""
+    if plant.state_limits is None:
+        return {}
+    return {f"limit_{name}": float(lim) for name, lim in zip(plant.state_names,
+                                                             plant.state_limits, strict=True)
+            if np.isfinite(lim)}
 
 
 def design_lti_all(plant: LTIPlant) -> dict[str, Any]:

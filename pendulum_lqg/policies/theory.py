@@ -71,7 +71,8 @@ class ClosedLoopTheory:
     covariance : Σ (n+q, n+q) of ``[x; ξ]`` at the sampling instants (nan when unstable)
     episode : the expected RMS over an episode from the scenario's x₀ and x̂₀
         (:class:`EpisodeTheory`), or ``None`` when not asked for
-    limits : ``{"theta_max", "track_limit", "force_limit"}`` of the scenario on the plant
+    limits : ``{"theta_max", "track_limit", "force_limit"}`` of the scenario on the plant, or
+        for a plant file ``{"force_limit", "limit_<state>" …}`` of each state it limits
     notes : what the theory assumed (steady-state gains)
     """
 
@@ -103,6 +104,10 @@ class ClosedLoopTheory:
                     "without bound")
         parts, beyond = [], []
         checks = [("track_limit", 0, "the track"), ("theta_max", 1, "θ_max")]
+        per_state = [(key, self.state_names.index(key[len("limit_"):]), "its limit")
+                     for key in self.limits if key.startswith("limit_")]
+        if per_state:                           # a plant file's state_limits: each limited state
+            checks = per_state
         for key, i, what in checks[:len(self.state_names)]:
             name, unit = self.state_names[i], self.units[i]
             s, lim = self.std[name], self.limits.get(key, float("inf"))
