@@ -38,8 +38,30 @@ LABELS = {"noise_scale": "noise scale (× lecture std)", "control_period": "cont
           "duration": "duration [s]"}
 
 
+#: The cart-pole's estimation-error columns with their labels (a plant given as matrices has its
+#: own, named after its states: :func:`est_states`).
 EST_STATES = (("rms_est_err_p", "p [m]"), ("rms_est_err_theta", "θ [rad]"),
               ("rms_est_err_p_dot", "ṗ [m/s]"), ("rms_est_err_theta_dot", "θ̇ [rad/s]"))
+
+
+def est_states(rows: list[dict[str, Any]]) -> tuple[tuple[str, str], ...]:
+    """The estimation-error columns of these episode rows with their labels: the columns the
+    rows hold (``rms_est_err_<state>``, the layout's state names), labelled as the cart-pole's
+    where they are its, else by the state's name."""
+    labels = dict(EST_STATES)
+    cols = [k for k in (rows[0] if rows else {}) if k.startswith("rms_est_err_")]
+    return tuple((c, labels.get(c, c.removeprefix("rms_est_err_"))) for c in cols)
+
+
+def _has_estimate(rows: list[dict[str, Any]], columns: tuple[tuple[str, str], ...]) -> bool:
+    """Whether any row has a finite, positive estimation error (a true-state policy has none)."""
+    def positive(v: object) -> bool:
+        try:
+            f = float(v)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            return False
+        return bool(np.isfinite(f) and f > 0)
+    return any(positive(r.get(c)) for r in rows for c, _ in columns)
 
 
 def _group(rows: list[dict[str, Any]], keys: list[str]) -> dict[tuple, list[dict[str, Any]]]:
@@ -152,9 +174,7 @@ def grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], mk: Fi
     figs = [(f"success rate vs {x}", _success_figure(sweep, out, name, mk))]
     if x == "control_period":
         figs.append(("cost vs control period", _cost_vs_period_figure(sweep, out, name, mk)))
-    has_est = any(np.isfinite(float(r["rms_est_err_theta"])) and float(r["rms_est_err_theta"]) > 0
-                  for r in rows)
-    if has_est and x == "noise_scale":
+    if _has_estimate(rows, est_states(rows)) and x == "noise_scale":
         figs.append(("estimation error per state", _estimation_error_figure(sweep, out, name, mk)))
     nominal = 1.0 if x == "noise_scale" else None
     figs.append(("cost distributions", _cost_boxes(rows, out, name, series + sweep.facets,
@@ -212,8 +232,13 @@ def _finish_panels(fig: Any, axes: Any, ylabel: str, title: str, out: Path, file
 def _estimation_error_figure(sweep: _Sweep, out: Path, name: str, mk: Figures) -> str:
     """RMS estimation error of each state against the noise scale (all episodes, mean ± SE)."""
     x, rows = sweep.x, sweep.rows
-    fig, axes = mk.subplots(2, 2, figsize=(12, 8))
-    for ax, (metric, label) in zip(axes.flat, EST_STATES, strict=True):
+    columns = est_states(rows)
+    ncol = min(len(columns), 2)
+    nrow = -(-len(columns) // ncol)
+    fig, axes = mk.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.0 * nrow), squeeze=False)
+    for ax in list(axes.flat)[len(columns):]:
+        ax.set_visible(False)
+    for ax, (metric, label) in zip(axes.flat, columns, strict=False):
         for key, grp in sorted(_group(rows, sweep.series).items()):
             xs, m, se = _metric_curve(grp, x, metric, successes_only=False)
             if not np.any(m > 0):
