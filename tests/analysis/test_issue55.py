@@ -4,6 +4,7 @@ given as matrices (items 7, 8, 9, 11)."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -40,3 +41,32 @@ def test_item11_summarize_rows_of_a_matrix_plant(di_results):
     # the same as the bench's own summary of that configuration
     summ = json.loads((di_results / "summary.json").read_text())["configurations"][0]["summary"]
     assert s["rms_velocity"]["mean"] == pytest.approx(summ["rms_velocity"]["mean"], rel=1e-12)
+
+
+def _table_row(md, policy):
+    lines = md.splitlines()
+    head = next(line for line in lines if line.startswith("| policy |"))
+    row = next(line for line in lines if line.startswith(f"| {policy} |"))
+    return ([c.strip() for c in head.strip("|").split("|")],
+            [c.strip() for c in row.strip("|").split("|")])
+
+
+def test_item7_bench_table_shows_the_episode_theory(tmp_path):
+    """A noise-free double integrator started at x₀ = [1, 0]: its stationary RMS is 0, the episode
+    theory is the transient, and the simulated RMS is that transient."""
+    lti = Path(__file__).resolve().parents[2] / "experiments" / "lti" / "double_integrator.toml"
+    exp = tmp_path / "quiet.toml"
+    exp.write_text(f'name = "quiet"\nlti_file = "{lti}"\nepisodes = 2\nseed = 0\n'
+                   '[scenario]\nduration = 5.0\n[grid]\npolicy = ["dlqr+kalman"]\n'
+                   'noise_scale = [0.0]\n')
+    out = tmp_path / "res"
+    assert main(["bench", str(exp), "--out", str(out)]) == 0
+    th = json.loads((out / "summary.json").read_text())["configurations"][0]["theory"]
+    assert th["rms_position"] == 0.0                   # stationary: nothing left without noise
+    ep = th["episode"]["rms_position"]
+    head, row = _table_row((out / "summary.md").read_text(), "dlqr+kalman")
+    i = head.index("RMS position")
+    assert head[i + 1] == "theory"
+    assert row[i + 1] == f"{ep:.3g} (0)"
+    assert float(row[i]) == pytest.approx(ep, rel=2e-3)     # the simulation is the transient
+    assert "expected RMS over the episode" in (out / "summary.md").read_text()
