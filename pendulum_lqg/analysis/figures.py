@@ -328,6 +328,12 @@ def delay_table(rows: list[dict[str, Any]], series: list[str]) -> list[str]:
     return [*lines, ""]
 
 
+#: The fewest successful episodes a cost box is drawn from: a box of fewer (2 of 200 survivors,
+#: say) would show quartiles of nothing and look like the cheapest policy; its points are drawn
+#: instead, and every box says its n (docs/analysis.md).
+MIN_BOX_EPISODES = 10
+
+
 def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[str],
                 at: tuple[str, float | None] | None, mk: Figures) -> str:
     """Box plots of the cost of successful episodes per series (per x value when there are few)."""
@@ -354,7 +360,16 @@ def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[s
             data.append(c if c else [np.nan])
             labels.append(" ".join(f"{n} {v}" if n not in ("policy", "discretization") else str(v)
                                    for n, v in zip(names or series, key, strict=False)))
-        ax.boxplot(data, orientation="horizontal", showfliers=True, flierprops={"ms": 2})
+        boxed = [c if len(c) >= MIN_BOX_EPISODES else [np.nan] for c in data]
+        ax.boxplot(boxed, orientation="horizontal", showfliers=True, flierprops={"ms": 2})
+        for i, c in enumerate(data, start=1):
+            n = sum(1 for v in c if v == v)
+            if 0 < n < MIN_BOX_EPISODES:          # too few for quartiles: the points themselves
+                ax.plot(c, [i] * len(c), ls="none", marker="x", ms=5, color="C3")
+            ax.text(1.01, i, f"n = {n}" + ("" if n >= MIN_BOX_EPISODES or n == 0
+                                           else f" < {MIN_BOX_EPISODES}: no box"),
+                    transform=ax.get_yaxis_transform(), ha="left", va="center", fontsize=8,
+                    clip_on=False)
         ax.set_yticks(range(1, len(labels) + 1), labels)
         ax.set_xscale("log")
         ax.xaxis.set_major_locator(ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
@@ -363,7 +378,8 @@ def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[s
         ax.set_xlabel("cost J (successful episodes)")
         if xv is not None:
             ax.set_title(f"{LABELS.get(xk, xk)} = {xv:g}")
-    fig.suptitle(f"{name}: cost distributions")
+    fig.suptitle(f"{name}: cost distributions (n successful episodes; a box needs "
+                 f"n ≥ {MIN_BOX_EPISODES}, fewer are drawn as points)")
     return save(fig, out, f"{name}_cost_distribution.png")
 
 

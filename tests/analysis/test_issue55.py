@@ -70,3 +70,44 @@ def test_item7_bench_table_shows_the_episode_theory(tmp_path):
     assert row[i + 1] == f"{ep:.3g} (0)"
     assert float(row[i]) == pytest.approx(ep, rel=2e-3)     # the simulation is the transient
     assert "expected RMS over the episode" in (out / "summary.md").read_text()
+
+
+class _Keep:
+    """A :class:`~pendulum_lqg.analysis.reading.Figures` that keeps the figures it made."""
+
+    def __init__(self):
+        from pendulum_lqg.analysis.reading import Figures
+
+        self._mk, self.figures = Figures(), []
+
+    def subplots(self, *args, **kwargs):
+        fig, axes = self._mk.subplots(*args, **kwargs)
+        self.figures.append(fig)
+        return fig, axes
+
+
+def test_item9_cost_boxes_show_n_and_no_box_below_the_minimum(tmp_path):
+    from pendulum_lqg.analysis.figures import MIN_BOX_EPISODES, _cost_boxes
+
+    assert MIN_BOX_EPISODES == 10
+    rng = np.random.default_rng(0)
+    rows = [{"config": 0, "policy": "dlqr+kalman", "success": True, "cost": float(c)}
+            for c in 30 + rng.random(200)]
+    rows += [{"config": 1, "policy": "dlqr+luenberger", "success": i < 2, "cost": 5.0 + i}
+             for i in range(200)]                              # 2 survivors of 200, cheap ones
+    keep = _Keep()
+    assert _cost_boxes(rows, tmp_path, "t", ["policy"], None, keep) == "t_cost_distribution.png"
+    ax = keep.figures[0].axes[0]
+    texts = sorted(t.get_text() for t in ax.texts)
+    assert texts == ["n = 2 < 10: no box", "n = 200"]
+    labels = [t.get_text() for t in ax.get_yticklabels()]
+    assert labels == ["dlqr+luenberger", "dlqr+kalman"]
+    # the two survivors are drawn as points at the luenberger row (y = 1), not as a box
+    points = [ln for ln in ax.lines if ln.get_marker() == "x"]
+    assert len(points) == 1
+    assert list(points[0].get_xdata()) == [5.0, 6.0] and list(points[0].get_ydata()) == [1, 1]
+    boxes = [ln for ln in ax.lines if ln.get_marker() != "x"
+             and np.all(np.isfinite(np.asarray(ln.get_xdata(), dtype=float)))
+             and len(ln.get_xdata())]
+    ys = {float(y) for ln in boxes for y in ln.get_ydata()}
+    assert ys and all(1.5 < y < 2.5 for y in ys)      # every box artist is kalman's (y = 2)
