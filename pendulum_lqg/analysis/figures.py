@@ -38,8 +38,7 @@ LABELS = {"noise_scale": "noise scale (× lecture std)", "control_period": "cont
           "duration": "duration [s]"}
 
 
-#: The cart-pole's estimation-error columns with their labels (a plant given as matrices has its
-#: own, named after its states: :func:`est_states`).
+#: The cart-pole's estimation-error columns and labels (a matrix plant's: :func:`est_states`).
 EST_STATES = (("rms_est_err_p", "p [m]"), ("rms_est_err_theta", "θ [rad]"),
               ("rms_est_err_p_dot", "ṗ [m/s]"), ("rms_est_err_theta_dot", "θ̇ [rad/s]"))
 
@@ -55,13 +54,8 @@ def est_states(rows: list[dict[str, Any]]) -> tuple[tuple[str, str], ...]:
 
 def _has_estimate(rows: list[dict[str, Any]], columns: tuple[tuple[str, str], ...]) -> bool:
     """Whether any row has a finite, positive estimation error (a true-state policy has none)."""
-    def positive(v: object) -> bool:
-        try:
-            f = float(v)  # type: ignore[arg-type]
-        except (TypeError, ValueError):
-            return False
-        return bool(np.isfinite(f) and f > 0)
-    return any(positive(r.get(c)) for r in rows for c, _ in columns)
+    values = np.array([float(r[c]) for r in rows for c, _ in columns])
+    return bool(np.any(np.isfinite(values) & (values > 0)))
 
 
 def _group(rows: list[dict[str, Any]], keys: list[str]) -> dict[tuple, list[dict[str, Any]]]:
@@ -341,10 +335,8 @@ def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[s
     if at is not None:
         xk, xv = at
         xs = sorted({float(r[xk]) for r in rows})
-        if xv is None or xv not in xs:
-            xs = xs if len(xs) <= 4 else [xs[0], xs[len(xs) // 2], xs[-1]]
-        else:
-            xs = [xv]
+        xs = ([xv] if xv is not None and xv in xs
+              else xs if len(xs) <= 4 else [xs[0], xs[len(xs) // 2], xs[-1]])
     else:
         xk, xs = "", [None]  # type: ignore[list-item]   # one panel, no grid value
     fig, axes = mk.subplots(1, len(xs), figsize=(2.0 + 4.2 * len(xs), 1.2 + 0.36 * len(groups)),
