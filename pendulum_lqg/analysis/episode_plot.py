@@ -5,7 +5,9 @@
 
 * one panel per state (p, θ, ṗ, θ̇ for the cart-pole): the true state, the estimate x̂ the policy
   acted on and, where the estimator has a covariance (the Kalman filters), the band
-  x̂ ± 2σ with σ = √diag(P), P the a-posteriori covariance of x̂ − x;
+  x̂ ± 2σ with σ = √diag(P), P the a-posteriori covariance of x̂ − x at each sample (the
+  filter's covariance over the episode from its start, ``Trajectory.P``; see
+  :meth:`~pendulum_lqg.policies.estimators.Estimator.error_covariances`);
 * the measurement y, every channel;
 * the force u held over each control period, with the saturation ±u_max and, where it differs,
   the force the policy asked for before saturation;

@@ -38,8 +38,24 @@ LABELS = {"noise_scale": "noise scale (× lecture std)", "control_period": "cont
           "duration": "duration [s]"}
 
 
+#: The cart-pole's estimation-error columns and labels (a matrix plant's: :func:`est_states`).
 EST_STATES = (("rms_est_err_p", "p [m]"), ("rms_est_err_theta", "θ [rad]"),
               ("rms_est_err_p_dot", "ṗ [m/s]"), ("rms_est_err_theta_dot", "θ̇ [rad/s]"))
+
+
+def est_states(rows: list[dict[str, Any]]) -> tuple[tuple[str, str], ...]:
+    """The estimation-error columns of these episode rows with their labels: the columns the
+    rows hold (``rms_est_err_<state>``, the layout's state names), labelled as the cart-pole's
+    where they are its, else by the state's name."""
+    labels = dict(EST_STATES)
+    cols = [k for k in (rows[0] if rows else {}) if k.startswith("rms_est_err_")]
+    return tuple((c, labels.get(c, c.removeprefix("rms_est_err_"))) for c in cols)
+
+
+def _has_estimate(rows: list[dict[str, Any]], columns: tuple[tuple[str, str], ...]) -> bool:
+    """Whether any row has a finite, positive estimation error (a true-state policy has none)."""
+    values = np.array([float(r[c]) for r in rows for c, _ in columns])
+    return bool(np.any(np.isfinite(values) & (values > 0)))
 
 
 def _group(rows: list[dict[str, Any]], keys: list[str]) -> dict[tuple, list[dict[str, Any]]]:
@@ -152,9 +168,7 @@ def grid_figures(folder: Path, out: Path, name: str, src: dict[str, Any], mk: Fi
     figs = [(f"success rate vs {x}", _success_figure(sweep, out, name, mk))]
     if x == "control_period":
         figs.append(("cost vs control period", _cost_vs_period_figure(sweep, out, name, mk)))
-    has_est = any(np.isfinite(float(r["rms_est_err_theta"])) and float(r["rms_est_err_theta"]) > 0
-                  for r in rows)
-    if has_est and x == "noise_scale":
+    if _has_estimate(rows, est_states(rows)) and x == "noise_scale":
         figs.append(("estimation error per state", _estimation_error_figure(sweep, out, name, mk)))
     nominal = 1.0 if x == "noise_scale" else None
     figs.append(("cost distributions", _cost_boxes(rows, out, name, series + sweep.facets,
@@ -212,8 +226,13 @@ def _finish_panels(fig: Any, axes: Any, ylabel: str, title: str, out: Path, file
 def _estimation_error_figure(sweep: _Sweep, out: Path, name: str, mk: Figures) -> str:
     """RMS estimation error of each state against the noise scale (all episodes, mean ± SE)."""
     x, rows = sweep.x, sweep.rows
-    fig, axes = mk.subplots(2, 2, figsize=(12, 8))
-    for ax, (metric, label) in zip(axes.flat, EST_STATES, strict=True):
+    columns = est_states(rows)
+    ncol = min(len(columns), 2)
+    nrow = -(-len(columns) // ncol)
+    fig, axes = mk.subplots(nrow, ncol, figsize=(6.0 * ncol, 4.0 * nrow), squeeze=False)
+    for ax in list(axes.flat)[len(columns):]:
+        ax.set_visible(False)
+    for ax, (metric, label) in zip(axes.flat, columns, strict=False):
         for key, grp in sorted(_group(rows, sweep.series).items()):
             xs, m, se = _metric_curve(grp, x, metric, successes_only=False)
             if not np.any(m > 0):
@@ -303,6 +322,12 @@ def delay_table(rows: list[dict[str, Any]], series: list[str]) -> list[str]:
     return [*lines, ""]
 
 
+#: The fewest successful episodes a cost box is drawn from: a box of fewer (2 of 200 survivors,
+#: say) would show quartiles of nothing and look like the cheapest policy; its points are drawn
+#: instead, and every box says its n (docs/analysis.md).
+MIN_BOX_EPISODES = 10
+
+
 def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[str],
                 at: tuple[str, float | None] | None, mk: Figures) -> str:
     """Box plots of the cost of successful episodes per series (per x value when there are few)."""
@@ -310,10 +335,8 @@ def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[s
     if at is not None:
         xk, xv = at
         xs = sorted({float(r[xk]) for r in rows})
-        if xv is None or xv not in xs:
-            xs = xs if len(xs) <= 4 else [xs[0], xs[len(xs) // 2], xs[-1]]
-        else:
-            xs = [xv]
+        xs = ([xv] if xv is not None and xv in xs
+              else xs if len(xs) <= 4 else [xs[0], xs[len(xs) // 2], xs[-1]])
     else:
         xk, xs = "", [None]  # type: ignore[list-item]   # one panel, no grid value
     fig, axes = mk.subplots(1, len(xs), figsize=(2.0 + 4.2 * len(xs), 1.2 + 0.36 * len(groups)),
@@ -329,7 +352,16 @@ def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[s
             data.append(c if c else [np.nan])
             labels.append(" ".join(f"{n} {v}" if n not in ("policy", "discretization") else str(v)
                                    for n, v in zip(names or series, key, strict=False)))
-        ax.boxplot(data, orientation="horizontal", showfliers=True, flierprops={"ms": 2})
+        boxed = [c if len(c) >= MIN_BOX_EPISODES else [np.nan] for c in data]
+        ax.boxplot(boxed, orientation="horizontal", showfliers=True, flierprops={"ms": 2})
+        for i, c in enumerate(data, start=1):
+            n = sum(1 for v in c if v == v)
+            if 0 < n < MIN_BOX_EPISODES:          # too few for quartiles: the points themselves
+                ax.plot(c, [i] * len(c), ls="none", marker="x", ms=5, color="C3")
+            ax.text(1.01, i, f"n = {n}" + ("" if n >= MIN_BOX_EPISODES or n == 0
+                                           else f" < {MIN_BOX_EPISODES}: no box"),
+                    transform=ax.get_yaxis_transform(), ha="left", va="center", fontsize=8,
+                    clip_on=False)
         ax.set_yticks(range(1, len(labels) + 1), labels)
         ax.set_xscale("log")
         ax.xaxis.set_major_locator(ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
@@ -338,7 +370,8 @@ def _cost_boxes(rows: list[dict[str, Any]], out: Path, name: str, series: list[s
         ax.set_xlabel("cost J (successful episodes)")
         if xv is not None:
             ax.set_title(f"{LABELS.get(xk, xk)} = {xv:g}")
-    fig.suptitle(f"{name}: cost distributions")
+    fig.suptitle(f"{name}: cost distributions (n successful episodes; a box needs "
+                 f"n ≥ {MIN_BOX_EPISODES}, fewer are drawn as points)")
     return save(fig, out, f"{name}_cost_distribution.png")
 
 

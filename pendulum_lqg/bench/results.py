@@ -308,8 +308,8 @@ def config_theory(cfg: Configuration) -> dict[str, Any] | None:
     exact ZOH for MuJoCo), as the summary's ``theory`` entry; ``None`` for what the theory does
     not model (plugins, delays, dropout, lags, force noise, randomised plants). Its ``episode``
     holds the expected RMS over one episode from the configuration's x₀ and x̂₀ (after its
-    ``burn_in``) and the expected J, in the Monte Carlo's column names (summary.json only: the
-    Markdown table keeps its stationary columns)."""
+    ``burn_in``) and the expected J, in the Monte Carlo's column names (the Markdown table shows
+    it in each *theory* cell, the stationary value beside it)."""
     if cfg.plugin is not None:
         return None
     return cfg.source.theory(cfg)
@@ -325,7 +325,22 @@ def _stat_cell(stat: dict[str, float], digits: int = 3) -> str:
 
 
 def _theory_cell(theory: dict[str, Any], key: str) -> str:
-    return _stat_cell({"mean": theory[key], "se": float("nan")}) if key in theory else "–"
+    """A *theory* cell: the expected RMS over the episode from its x₀ and x̂₀ (the finite-horizon
+    theory, ``theory.episode``), the value the simulated RMS estimates, with the stationary value
+    of the loop in parentheses; the stationary value alone where the episode theory is absent."""
+    if key not in theory:
+        return "–"
+    stationary = _stat_cell({"mean": theory[key], "se": float("nan")})
+    episode = theory.get("episode") or {}
+    if key not in episode:
+        return stationary
+    return f"{_stat_cell({'mean': episode[key], 'se': float('nan')})} ({stationary})"
+
+
+#: How the tables' caption says what a *theory* cell holds (:func:`_theory_cell`).
+THEORY_CAPTION = ("each *theory* cell is the expected RMS over the episode from its x₀ and x̂₀ "
+                  "(the finite-horizon theory of `summary.json`'s `theory.episode`), with the "
+                  "stationary value of the loop in parentheses")
 
 
 def markdown_table(spec: ExperimentSpec, summary: dict[str, Any]) -> str:
@@ -345,8 +360,8 @@ def _table(source: PlantSource, spec: ExperimentSpec, summary: dict[str, Any]) -
             "RMS p [m]", "theory", "RMS u [N]", "theory", "saturated", "RMS θ̂−θ [rad]", "theory",
             "RMS ṗ̂−ṗ [m/s]", "loop radius", "failures"]
     lines = [f"**{spec.name}** — {spec.episodes} episodes per configuration, seed {spec.seed}; "
-             "each *theory* column is the stationary value of the linearised loop with the "
-             "limits off (`pendulum-lqg theory`), the loop radius its spectral radius",
+             f"{THEORY_CAPTION}, both of the linearised loop with the limits off "
+             "(`pendulum-lqg theory`); the loop radius is its spectral radius",
              "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for c in configs:
         s = c["summary"]
@@ -383,9 +398,8 @@ def _lti_markdown_table(source: LTISource, spec: ExperimentSpec, summary: dict[s
             *(h for s in states for h in (f"RMS error {s}", "theory")), "loop radius",
             "failures"]
     lines = [f"**{spec.name}** — LTI plant `{Path(source.path).name}`, {spec.episodes} "
-             f"episodes per configuration, seed {spec.seed}; each *theory* column is the "
-             "stationary value of the loop (`pendulum-lqg theory --lti`), the loop radius its "
-             "spectral radius", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+             f"episodes per configuration, seed {spec.seed}; {THEORY_CAPTION} "
+             "(`pendulum-lqg theory --lti`); the loop radius is its spectral radius", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for c in summary["configurations"]:
         s = c["summary"]
         if s is None:

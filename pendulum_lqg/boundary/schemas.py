@@ -42,6 +42,9 @@ ESTIMATORS = ("kalman",)
 #: What a suite's reference and built-in designs are designed on (a score file's ``designed_on``;
 #: the rule: :func:`pendulum_lqg.scoreboard.suites.designed_on`).
 DESIGNED_ON = ("plant played", "nominal MJCF", "nominal MJCF + model_overrides")
+#: What the designs of a suite on a plant given as matrices are designed on (an LTI suite's score
+#: files say it: :mod:`pendulum_lqg.scoreboard.lti_suite`).
+DESIGNED_ON_LTI = "the plant played (its LTI file)"
 
 _RATE = number(low=0.0, high=1.0)
 _COST = number(nullable=True)
@@ -67,7 +70,8 @@ def score_suite(where: Where, data: Any) -> dict[str, Any]:
            "fingerprint": where.get(data, "fingerprint", text),
            "episodes": where.get(data, "episodes", integer(1)),
            # absent from the files written before the suites said it
-           "designed_on": where.get(data, "designed_on", one_of(DESIGNED_ON), default=None)}
+           "designed_on": where.get(data, "designed_on", one_of((*DESIGNED_ON, DESIGNED_ON_LTI)),
+                                  default=None)}
     if not out["applicable"]:
         out["reason"] = where.get(data, "reason", any_text, default="")
         return out
@@ -204,6 +208,6 @@ def unit_record(path: str | os.PathLike[str]) -> dict[str, Any]:
     return out
 
 
-__all__ = ["ALGORITHMS", "DESIGNED_ON", "ESTIMATORS", "LINEAR_FORMAT", "LINEAR_INPUTS",
+__all__ = ["ALGORITHMS", "DESIGNED_ON", "DESIGNED_ON_LTI", "ESTIMATORS", "LINEAR_FORMAT", "LINEAR_INPUTS",
            "LINEAR_VERSION", "MAX_FRAME_STACK", "MAX_LINEAR_STATES", "SCORE_VERSION",
            "linear_controller", "score_file", "score_suite", "training_record", "unit_record"]

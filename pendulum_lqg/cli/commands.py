@@ -173,7 +173,7 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any],
     from rich.console import Console
     from rich.markup import escape
 
-    from pendulum_lqg.cli.lti import metric_table, success_line
+    from pendulum_lqg.cli.lti import SATURATED_LABEL, SATURATED_SCALE, metric_table, success_line
 
     con = Console(highlight=False)
     sc = config["scenario"]
@@ -191,7 +191,7 @@ def _print_summary(name: str, config: dict[str, Any], s: dict[str, Any],
             ("max_abs_theta", "max |θ| [rad]", 1.0), ("rms_p", "RMS p [m]", 1.0),
             ("max_abs_p", "max |p| [m]", 1.0), ("rms_u", "RMS u [N]", 1.0),
             ("max_abs_u", "max |u| [N]", 1.0),
-            ("saturated_fraction", "time saturated [% of the episode]", 100.0),
+            ("saturated_fraction", SATURATED_LABEL, SATURATED_SCALE),
             ("rms_est_err_p", "RMS p̂−p [m]", 1.0), ("rms_est_err_theta", "RMS θ̂−θ [rad]", 1.0),
             ("rms_est_err_p_dot", "RMS ṗ̂−ṗ [m/s]", 1.0),
             ("rms_est_err_theta_dot", "RMS θ̇̂−θ̇ [rad/s]", 1.0)]

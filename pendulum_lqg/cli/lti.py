@@ -150,10 +150,15 @@ def _print_summary(config: dict[str, Any], scenario: Any, s: dict[str, Any],
     con.print(success_line(s))
     t = metric_table()
     for key in summary_metrics(fields):
-        m, se = s[key]["mean"], s[key]["se"]
+        scale = SATURATED_SCALE if key == "saturated_fraction" else 1.0
+        m, se = s[key]["mean"] * scale, s[key]["se"] * scale
         cell = "–" if m != m else (f"{m:.4g}" if se != se else f"{m:.4g} ± {se:.2g}")
         t.add_row(escape(_label(key)), cell)
     con.print(t)
+
+
+#: How every run summary shows ``saturated_fraction``, on any plant: a percentage of the episode.
+SATURATED_LABEL, SATURATED_SCALE = "time saturated [% of the episode]", 100.0
 
 
 def _label(key: str) -> str:
@@ -161,7 +166,7 @@ def _label(key: str) -> str:
     if key == "cost":
         return "J = ∫xᵀQx + uᵀRu dt (successes)"
     if key == "saturated_fraction":
-        return "time saturated [share of the episode]"
+        return SATURATED_LABEL
     if key == "time_to_failure":
         return "time to failure [s] (failures)"
     if key.startswith("max_abs_"):

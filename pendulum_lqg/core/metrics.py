@@ -315,16 +315,28 @@ def mean_se(values: np.ndarray) -> tuple[float, float]:
 SUMMARY_METRICS: tuple[str, ...] = summary_metrics(EPISODE_FIELDS)
 
 
-def summarize(rows: list[dict[str, Any]], metrics: tuple[str, ...] = SUMMARY_METRICS,
+def _row_metrics(rows: list[dict[str, Any]]) -> tuple[str, ...]:
+    """The metrics of these rows: the cart-pole's if the rows hold them all, else those of the
+    rows' own columns (from ``cost`` on)."""
+    keys = tuple(rows[0]) if rows else ()
+    if not keys or all(m in rows[0] for m in SUMMARY_METRICS) or "cost" not in keys:
+        return SUMMARY_METRICS
+    return tuple(dict.fromkeys((*summary_metrics(keys), "time_to_failure")))
+
+
+def summarize(rows: list[dict[str, Any]], metrics: tuple[str, ...] | None = None,
               ) -> dict[str, Any]:
     """Aggregate episode rows: success rate with Wilson 95 % CI, mean ± SE of each metric
-    (``metrics``: the cart-pole's by default; an LTI plant's are :func:`summary_metrics` of its
-    columns).
+    (``metrics``: by default the cart-pole's when the rows hold its columns, else
+    :func:`summary_metrics` of the rows' own columns, so a plant given as matrices is summarised
+    by its state names).
 
     ``cost`` and ``settling_time`` are averaged over the successful episodes only (a failed
     episode's cost stops at the failure and would flatter it); the others over all episodes, and
     ``time_to_failure`` over the failures.
     """
+    if metrics is None:
+        metrics = _row_metrics(rows)
     n = len(rows)
     succ = np.array([bool(r["success"]) for r in rows], dtype=bool)
     s = int(succ.sum())

@@ -171,6 +171,19 @@ def run_episodes(plant: Plant, scenario: Scenario, policy: PolicyProtocol, *, se
                        shard_seconds=[t for res in results for t in res.shard_seconds])
 
 
+def _number_and_cover(trajectories: list[Trajectory], episodes: list[int],
+                      estimator: object | None) -> None:
+    """Give each trajectory its episode number and, where the estimator has one, the filter's
+    covariance over the episode from its start (the snapshots hold a steady-gain filter's limit
+    P from t = 0)."""
+    over_time = getattr(estimator, "error_covariances", None)
+    for tr, e in zip(trajectories, episodes, strict=True):
+        tr.episode = e
+        P = over_time(np.isfinite(tr.y).all(axis=1)) if callable(over_time) else None
+        if P is not None:
+            tr.P = P
+
+
 def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: int, episodes: list[int],
                backend: Literal["rollout", "step"], nthread: int, trajectory: bool,
                initial_states: np.ndarray | None, stop: threading.Event | None,
@@ -223,7 +236,6 @@ def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: i
         row["episode"] = e
     trajectories = log.split(n, seeds, rows, sim.layout.C) if log is not None else None
     if trajectories is not None:
-        for tr, e in zip(trajectories, episodes, strict=True):
-            tr.episode = e
+        _number_and_cover(trajectories, episodes, estimator)
     return BatchResult(rows=rows, trajectories=trajectories,
                        shard_seconds=[(start, time.perf_counter() - t0)])

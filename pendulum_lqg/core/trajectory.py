@@ -21,7 +21,9 @@ class Trajectory:
     t : (N,) sample times [s]; x : (N, 4) true state at the sample; y : (N, 2) noisy measurement;
     y_true : (N, 2) noise-free measurement; u : (N,) applied force; x_hat : (N, 4) estimate used;
     x_prior : (N, 4) a-priori estimate; innovation : (N, 2); P : (N, 4, 4) a-posteriori covariance
-    (nan if the estimator has none); cost : (N,) running cost at the end of each period;
+    of x̂ − x at each sample, from the filter's start where its estimator gives one
+    (``error_covariances``), else what the estimator holds (nan if it has none); cost : (N,)
+    running cost at the end of each period;
     t_physics : (N·k,), states : (N·k, 4); u_policy : (N,) the force the policy asked for, before
     saturation (``u`` is that force saturated to ±u_max)
     """

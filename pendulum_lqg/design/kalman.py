@@ -81,8 +81,15 @@ def measurement_update(M: np.ndarray, C: np.ndarray, V: np.ndarray) -> tuple[np.
     time-varying designs and the runtime time-varying filter all call it."""
     S = C @ M @ C.T + V
     L = np.linalg.solve(S, C @ M).T
+    return L, joseph_update(M, L, C, V)
+
+
+def joseph_update(M: np.ndarray, L: np.ndarray, C: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """The a-posteriori covariance ``P = (I − LC) M (I − LC)ᵀ + L V Lᵀ`` of ``x̂ = x̄ + L(y − C x̄)``
+    for any gain ``L`` (exact for every gain, not only the optimal one: the estimate error is
+    ``(I − LC)(x̄ − x) + L v``), ``M`` the a-priori covariance, ``V`` the measurement noise's."""
     I_LC = np.eye(M.shape[0]) - L @ C
-    return L, I_LC @ M @ I_LC.T + L @ V @ L.T
+    return I_LC @ M @ I_LC.T + L @ V @ L.T
 
 @design_function('W and V')
 def kalman(A: ArrayLike, G: ArrayLike, C: ArrayLike, W: ArrayLike, V: ArrayLike) -> KalmanResult:

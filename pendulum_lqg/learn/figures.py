@@ -95,6 +95,18 @@ def _share_above(tau: float) -> Any:
     return share
 
 
+#: Line styles of the methods past each ten colours: matplotlib's cycle has ten colours, and the
+#: eleventh method would share the first one's line.
+LINE_STYLES = ("-", "--", ":", "-.")
+
+
+def method_styles(methods: list[str]) -> dict[str, dict[str, str]]:
+    """A colour and a line style per method, sorted by name: the ten colours of ``tab10`` with
+    the first line style, then again with the next (distinct for up to 40 methods)."""
+    return {m: {"color": f"C{i % 10}", "ls": LINE_STYLES[(i // 10) % len(LINE_STYLES)]}
+            for i, m in enumerate(sorted(methods))}
+
+
 def draw_profile(scores: dict[str, np.ndarray], suites: list[str], path: Path) -> None:
     from matplotlib.figure import Figure
 
@@ -102,9 +114,10 @@ def draw_profile(scores: dict[str, np.ndarray], suites: list[str], path: Path) -
 
     fig = Figure(figsize=(7.0, 4.2), layout="constrained")
     ax = fig.add_subplot()
+    styles = method_styles(list(scores))
     for method, x in sorted(scores.items()):
         curve = performance_profile(x, TAUS)
-        line, = ax.plot(TAUS, curve, label=f"{method} ({x.shape[0]} runs)")
+        line, = ax.plot(TAUS, curve, label=f"{method} ({x.shape[0]} runs)", **styles[method])
         if x.shape[0] > 1:
             band = np.array([stratified_bootstrap_ci(x, _share_above(t), resamples=500)
                              for t in TAUS])
@@ -178,10 +191,17 @@ def median_iqr(runs: list[dict[str, np.ndarray]], x: str, y: str,
 
 
 def draw_curves(curves: dict[str, list[dict[str, np.ndarray]]], path: Path) -> None:
+    save_figure(curves_figure(curves), path, where="--out", what="figure", dpi=120)
+
+
+def curves_figure(curves: dict[str, list[dict[str, np.ndarray]]]) -> Any:
+    """The learning curves' figure (``curves.png``): a colour and line style per method
+    (:func:`method_styles`)."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(10.0, 6.5), layout="constrained")
     axes = fig.subplots(2, 2, sharey="row")
+    styles = method_styles(list(curves))
     for method, runs in sorted(curves.items()):
         for col, (x, scale, label) in enumerate((("env_steps", 1e6, "env steps [millions]"),
                                                  ("wall_seconds", 3600.0, "wall time [h]"))):
@@ -189,13 +209,14 @@ def draw_curves(curves: dict[str, list[dict[str, np.ndarray]]], path: Path) -> N
                                              ("score_mean", "failure-aware score"))):
                 ax = axes[row, col]
                 grid, med, lo, hi = median_iqr(runs, x, y)
-                line, = ax.plot(grid / scale, med, label=f"{method} ({len(runs)} seeds)")
+                line, = ax.plot(grid / scale, med, label=f"{method} ({len(runs)} seeds)",
+                                **styles[method])
                 ax.fill_between(grid / scale, lo, hi, color=line.get_color(), alpha=0.2)
                 ax.set(xlabel=label, ylabel=name)
     axes[0, 0].legend(fontsize=8)
     fig.suptitle("Learning curves: median and interquartile range across seeds "
                  "(20 fixed non-suite episodes per point)")
-    save_figure(fig, path, where="--out", what="figure", dpi=120)
+    return fig
 
 
 # ---- training budgets ----------------------------------------------------------------------------

@@ -8,6 +8,10 @@ recordings and benchmarks can read them:
 * ``innovation`` — ``y − C x̄``;
 * for Kalman filters ``P`` (a-posteriori covariance), ``M`` (a-priori) and ``gain``.
 
+:meth:`Estimator.error_covariances` gives the covariance of ``x̂ − x`` at every sample of one
+episode, from the filter's start (what an episode's figure draws as ``x̂ ± 2σ``): a steady-gain
+filter's ``P`` is the limit it reaches, not its covariance during the start-up transient.
+
 The interface is two calls per control period: ``estimate(y) -> x̂`` and then ``update(u)`` with the
 input actually applied.
 
@@ -24,11 +28,14 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 
 import numpy as np
 
-from pendulum_lqg.design.kalman import measurement_update
+from pendulum_lqg.design.kalman import joseph_update, measurement_update
 from pendulum_lqg.errors import ShapeError
+
+_Step = Callable[[np.ndarray], np.ndarray]      # a covariance map M ↦ M′
 
 
 def matvec(M: np.ndarray, X: np.ndarray) -> np.ndarray:
@@ -98,6 +105,13 @@ class Estimator(ABC):
         self.x_hat = self.x_hat[rows]
         self.innovation = self.innovation[rows]
 
+    def error_covariances(self, received: np.ndarray) -> np.ndarray | None:
+        """The covariance of ``x̂ − x`` at each sample ``k`` of one episode (N, n, n), started
+        from the filter's a-priori covariance ``M0`` of ``x̄₀ − x₀``; ``received`` (N,) says which
+        samples arrived (a lost one is a prediction only). ``None``: the estimator has no model
+        of its error (no covariance, or none given at its start)."""
+        return None
+
 
 class TrueState(Estimator):
     """No observer: the controller sees the true state (the full-information reference)."""
@@ -113,6 +127,51 @@ class TrueState(Estimator):
         return None
 
 
+class FilterStart:
+    r"""What a steady-gain filter's error covariance starts from and is driven by: the a-priori
+    covariance ``M0`` of ``x̄₀ − x₀``, the process noise ``Qd`` per period and the measurement
+    noise ``V``. The recursion does not depend on the data, only on which samples arrived, so the
+    sequence of an episode whose every sample arrived is computed once and kept.
+
+    .. math:: P_k = (I - LC) M_k (I - LC)^T + L V L^T,\qquad M_{k+1} = \Phi P_k \Phi^T + Q_d
+
+    (current form; a lost sample has :math:`P_k = M_k`). With the steady gain it tends to the
+    stationary :math:`P`, from :math:`M_0` instead of from :math:`P` itself.
+    """
+
+    def __init__(self, M0: np.ndarray, Qd: np.ndarray, V: np.ndarray) -> None:
+        self.M0, self.Qd, self.V = (np.asarray(a, dtype=float) for a in (M0, Qd, V))
+        self._kept: dict[tuple[str, int], np.ndarray] = {}
+
+    def propagate(self, received: np.ndarray, update: _Step, Phi: np.ndarray) -> np.ndarray:
+        """The a-posteriori covariances (N, n, n): ``update(M)`` the measurement update of an
+        a-priori ``M``, ``Phi`` the time update."""
+        return self._run("posterior", received, update, Phi)
+
+    def propagate_prior(self, received: np.ndarray, step: _Step, Phi: np.ndarray) -> np.ndarray:
+        """The a-priori covariances (N, n, n) of a predictor: ``step(M)`` the next ``M`` after a
+        sample that arrived, ``Φ M Φᵀ + Q_d`` after a lost one."""
+        return self._run("prior", received, step, Phi)
+
+    def _run(self, kind: str, received: np.ndarray, step: _Step, Phi: np.ndarray) -> np.ndarray:
+        received = np.asarray(received, dtype=bool)
+        key = (kind, received.size)
+        if received.all() and key in self._kept:
+            return self._kept[key]
+        out = np.empty((received.size, *self.M0.shape))
+        M = self.M0
+        for k, got in enumerate(received.tolist()):
+            if kind == "posterior":
+                out[k] = step(M) if got else M
+                M = Phi @ out[k] @ Phi.T + self.Qd
+            else:
+                out[k] = M
+                M = step(M) if got else Phi @ M @ Phi.T + self.Qd
+        if received.all():
+            self._kept[key] = out
+        return out
+
+
 class CurrentEstimator(Estimator):
     r"""Current-estimate (filter) form with a constant gain — steady-state Kalman or Luenberger.
 
@@ -123,10 +182,19 @@ class CurrentEstimator(Estimator):
     form = "current"
 
     def __init__(self, Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray, L: np.ndarray, *,
-                 P: np.ndarray | None = None, M: np.ndarray | None = None) -> None:
+                 P: np.ndarray | None = None, M: np.ndarray | None = None,
+                 start: FilterStart | None = None) -> None:
         super().__init__(Phi.shape[0])
         self.Phi, self.Gamma, self.C, self.gain = Phi, Gamma, C, L
         self.P, self.M = P, M                     # steady covariances (Kalman only)
+        self.start = start
+
+    def error_covariances(self, received: np.ndarray) -> np.ndarray | None:
+        start = self.start
+        if start is None:
+            return None
+        return start.propagate(received, lambda M: joseph_update(M, self.gain, self.C, start.V),
+                               self.Phi)
 
     def estimate(self, y: np.ndarray) -> np.ndarray:
         self.x_prior = self._prior
@@ -156,14 +224,26 @@ class PredictorEstimator(Estimator):
     def __init__(self, F: np.ndarray, G_u: np.ndarray, G_y: np.ndarray, C: np.ndarray, *,
                  gain: np.ndarray | None = None, P: np.ndarray | None = None,
                  M: np.ndarray | None = None, Phi: np.ndarray | None = None,
-                 Gamma: np.ndarray | None = None) -> None:
+                 Gamma: np.ndarray | None = None, start: FilterStart | None = None) -> None:
         super().__init__(F.shape[0])
         self.F, self.G_u, self.G_y, self.C = F, G_u, G_y, C
         self.Phi = F + G_y @ C if Phi is None else Phi
         self.Gamma = G_u if Gamma is None else Gamma
         self.gain = G_y if gain is None else gain
         self.P, self.M = P, M
+        self.start = start
         self._y = np.zeros((0, C.shape[0]))
+
+    def error_covariances(self, received: np.ndarray) -> np.ndarray | None:
+        """The discrete predictor ``x̂⁺ = F x̂ + G_u u + G_y y`` (``F = Φ − G_y C``): its estimate
+        is its prior, so its error covariance ``M`` steps as ``F M Fᵀ + G_y V G_yᵀ + Q_d`` after a
+        sample that arrived (``Φ M Φᵀ + Q_d`` after a lost one)."""
+        start = self.start
+        if start is None:
+            return None
+        return start.propagate_prior(
+            received, lambda M: self.F @ M @ self.F.T + self.G_y @ start.V @ self.G_y.T + start.Qd,
+            self.Phi)
 
     def estimate(self, y: np.ndarray) -> np.ndarray:
         self._y = y
@@ -224,6 +304,11 @@ class TimeVaryingKalman(Estimator):
     def covariances(self, a: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(M_a, P_a, L_a)`` of age ``a`` (the closed-form theory follows the gains)."""
         return self._covariances(a)
+
+    def error_covariances(self, received: np.ndarray) -> np.ndarray | None:
+        """The filter's own ``P_a`` at each age: its gain schedule is its covariance recursion
+        from ``M0`` (a lost sample keeps the schedule, as the filter does)."""
+        return np.array([self._covariances(a)[1] for a in range(len(received))])
 
     def reset(self, x_hat0: np.ndarray, rows: np.ndarray | None = None) -> None:
         super().reset(x_hat0, rows)

@@ -22,7 +22,12 @@ def design_lti_policy(plant: LTIPlant, name: str, *,
     policy saturates its own output (default the file's ``force_limit``). Returns a
     :class:`~pendulum_lqg.policies.lqg.Policy`."""
     from pendulum_lqg import design
-    from pendulum_lqg.policies.estimators import CurrentEstimator, PredictorEstimator, TrueState
+    from pendulum_lqg.policies.estimators import (
+        CurrentEstimator,
+        FilterStart,
+        PredictorEstimator,
+        TrueState,
+    )
     from pendulum_lqg.policies.lqg import Policy
 
     controller, _, observer = name.partition("+")
@@ -37,9 +42,17 @@ def design_lti_policy(plant: LTIPlant, name: str, *,
     if observer == "none":
         est = TrueState(n)
     elif observer in ("kalman", "kalman-predictor"):
-        kf = design.dkalman(Phi, np.eye(n), C, plant.process_covariance(), plant.V)
-        est = (CurrentEstimator(Phi, Gamma, C, kf.L, P=kf.P, M=kf.M) if observer == "kalman"
-               else PredictorEstimator(Phi - kf.L_pred @ C, Gamma, kf.L_pred, C, P=kf.M, M=kf.M))
+        Qd = plant.process_covariance()
+        kf = design.dkalman(Phi, np.eye(n), C, Qd, plant.V)
+        # a plant given as matrices has no M0 option: its start is x₀ ~ N(x0, diag(x0_std²))
+        # with x̂₀ = 0, so x̄₀ − x₀ has the second moment x0 x0ᵀ + diag(x0_std²)
+        x0 = np.zeros(n) if plant.x0 is None else np.asarray(plant.x0, dtype=float)
+        sd = np.zeros(n) if plant.x0_std is None else np.asarray(plant.x0_std, dtype=float)
+        start = FilterStart(np.outer(x0, x0) + np.diag(sd ** 2), Qd, plant.V)
+        est = (CurrentEstimator(Phi, Gamma, C, kf.L, P=kf.P, M=kf.M, start=start)
+               if observer == "kalman"
+               else PredictorEstimator(Phi - kf.L_pred @ C, Gamma, kf.L_pred, C, P=kf.M, M=kf.M,
+                                       start=start))
         info["L"], info["observer_poles"] = est.gain, kf.poles
     else:
         if plant.observer_poles is not None:     # s-plane, mapped by z = e^{sT}

@@ -23,6 +23,7 @@ from pendulum_lqg.policies.estimators import (
     CurrentEstimator,
     DelayKalman,
     Estimator,
+    FilterStart,
     PredictorEstimator,
     ReducedOrderEstimator,
     TimeVaryingKalman,
@@ -121,12 +122,15 @@ def luenberger(d: ObserverProblem) -> Estimator:
 def kalman(d: ObserverProblem) -> Estimator:
     """The steady-state filter, current (``kalman``) or predictor (``kalman-predictor``) form."""
     kf = design.dkalman(d.Phi, np.eye(4), d.C, d.Qd_noise, d.noise.V)
+    # the error covariance of an episode starts where kalman-tv's does (M0), not at the limit P
+    start = FilterStart(np.diag(d.spec.M0), d.Qd_noise, d.noise.V)
     est: Estimator
     if d.spec.observer == "kalman":
-        est = CurrentEstimator(d.Phi, d.Gamma, d.C, kf.L, P=kf.P, M=kf.M)
+        est = CurrentEstimator(d.Phi, d.Gamma, d.C, kf.L, P=kf.P, M=kf.M, start=start)
         d.info["L"] = kf.L
     else:
-        est = PredictorEstimator(d.Phi - kf.L_pred @ d.C, d.Gamma, kf.L_pred, d.C, P=kf.M, M=kf.M)
+        est = PredictorEstimator(d.Phi - kf.L_pred @ d.C, d.Gamma, kf.L_pred, d.C, P=kf.M, M=kf.M,
+                                 start=start)
         d.info["L"] = kf.L_pred
     d.info["observer_poles"], d.info["P_kalman"] = kf.poles, kf.P
     return est

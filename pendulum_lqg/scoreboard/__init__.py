@@ -10,6 +10,7 @@ module            concept
 ``score``         success rate, mean J and the optimality gap to the reference; the score file
 ``board``         a folder of score files as one Markdown table
 ``sb3``           stable-baselines3 models as Gymnasium agents (the ``rl`` extra)
+``sb3_record``    the training record of your own stable-baselines3 model, from the command line
 ``sb3_batch``     a stable-baselines3 model scored batched in the native vector env
 ``sb3_vec``       stable-baselines3's ``VecEnv`` over the native vector env (training)
 ``obs_design``    what an RL agent's network sees, the same in training and scoring

@@ -104,16 +104,21 @@ def _aggregate(values: list[float | None], fmt: Callable[[float], str]) -> str:
 def method_runs(scores: Scores, repeated: list[str] | None = None,
                 ) -> dict[str, dict[int | str, dict[str, Any]]]:
     """The score files that name a ``method``, by method and training seed (a file without a
-    seed under its own name). A second file of the same method and seed is not counted twice:
-    it is named in ``repeated``."""
+    seed under its own name). Files of the same method and seed that played other suites are one
+    run (their suites merged); a suite the same method and seed played again is not counted twice:
+    the file is named in ``repeated``."""
     runs: dict[str, dict[int | str, dict[str, Any]]] = {}
     for path, d in sorted(scores, key=lambda item: item[0].name):
         if d.get("method") is None:
             continue
         seeds = runs.setdefault(d["method"], {})
         if d["seed"] in seeds:
-            if repeated is not None:
+            had = seeds[d["seed"]]
+            new = {s: e for s, e in d["suites"].items() if s not in had["suites"]}
+            if len(new) < len(d["suites"]) and repeated is not None:
                 repeated.append(f"{path.name} (`{d['method']}` seed {d['seed']})")
+            if new:
+                seeds[d["seed"]] = {**had, "suites": {**had["suites"], **new}}
             continue
         seeds[path.name if d["seed"] is None else d["seed"]] = d
     return runs
@@ -151,13 +156,16 @@ def methods_table(scores: Scores, suites: list[str], prints: dict[str, str]) -> 
         cells = [f"`{_md(method)}`", f"{len(seeds)}" + (f" ({listed})" if listed else "")]
         for s in suites:
             entries = comparable(seeds, s, prints)
-            cells += [_aggregate([e["success_rate"] for e in entries], lambda v: f"{100 * v:.0f} %"),
+            fewer = f" (n = {len(entries)})" if 0 < len(entries) < len(seeds) else ""
+            cells += [_aggregate([e["success_rate"] for e in entries], lambda v: f"{100 * v:.0f} %")
+                      + fewer,
                       _aggregate([e["score_mean"] for e in entries], lambda v: f"{v:.2f}")]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "Methods: the runs of one method (score files with the same `method`, one per "
               "training seed). Per suite, the interquartile mean over the runs of the success rate "
               "and of the failure-aware score, each with its 95 % stratified bootstrap interval "
-              "over runs (2 000 resamples)."]
+              "over runs (2 000 resamples); a suite that fewer of the method's runs played says how many "
+              "(n = k)."]
     if repeated:
         lines += ["", "Counted once (the same method and seed again): " + "; ".join(repeated) + "."]
     return lines
@@ -240,8 +248,8 @@ def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> st
               "(0 for a failed episode; 1 = the reference), with its 95 % bootstrap interval "
               "over episodes (n/a: no rows of the suite's reference in the folder). Designed on: "
               "the model the suite's reference, its full-state bound and every built-in entry are "
-              "designed on — the plant played where the suite fixes its plant, the nominal MJCF "
-              "where it randomises it (blank: score files that do not say)."]
+              "designed on — the plant played where the suite fixes its plant (its LTI file for a "
+              "plant given as matrices), the nominal MJCF where it randomises it (blank: score files that do not say)."]
     lines += methods_table(scores, suites, prints)
     if stale:
         lines += ["", "Not comparable (another suite version or episode count): "

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from pendulum_lqg.boundary.fields import Where, integer, number, one_of, table, text
+from pendulum_lqg.boundary.schemas import DESIGNED_ON_LTI
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.util.limits import MAX_SCORE_EPISODES
 
@@ -41,8 +42,8 @@ from pendulum_lqg.util.limits import MAX_SCORE_EPISODES
 LTI_SUITE_KEYS = ("name", "version", "purpose", "lti_file", "reference", "episodes", "seed",
                   "scenario")
 SCENARIO_KEYS = ("duration", "noise_scale", "estimate0", "burn_in")
-#: What the designs of an LTI suite are designed on: the file's plant, the plant played.
-DESIGNED_ON_LTI = "the plant played (its LTI file)"
+# What the designs of an LTI suite are designed on, DESIGNED_ON_LTI (the file's plant, the plant
+# played), is kept where the score files' schema reads it: pendulum_lqg.boundary.schemas.
 
 
 @dataclass(frozen=True)
