@@ -40,11 +40,19 @@ import numpy as np
 
 from pendulum_lqg.errors import ConfigError
 
-BUDGETS = (5_000, 10_000, 20_000, 50_000, 100_000, 200_000, 500_000)
+BUDGETS = (5_000, 10_000, 15_000, 20_000, 50_000, 100_000, 200_000, 500_000)
 SUITES = ("lecture", "mismatch")
 SEEDS = (0, 1, 2, 3, 4)
 COLUMNS = ("suite", "seed", "budget", "logged_steps", "stepped_steps", "success", "score", "J",
-           "J_ref", "gap", "wall_seconds")
+           "J_ref", "gap", "exact_J", "exact_J_opt", "exact_gap", "exact_episode_gap",
+           "spectral_radius", "wall_seconds")
+#: Ceiling of one budget [logged env steps]: the identification keeps every logged step's y and u
+#: in memory and refits on them each round; 10⁷ is 20 × the largest budget the figure uses.
+MAX_BUDGET = 10_000_000
+#: Ceiling of the rows of one run (suites × seeds × budgets), each an identification and a score.
+MAX_ROWS = 10_000
+#: Bootstrap resamples over seeds of the exact gap's slope, and their seed.
+SLOPE_RESAMPLES, SLOPE_SEED = 2000, 0
 CURVE_FILE = re.compile(r"^(?P<method>.+)-seed(?P<seed>\d+)-curve\.csv$")
 
 
@@ -54,8 +62,10 @@ def run_root(seed: int) -> int:
 
 
 def price_row(suite: Any, reference: list[dict[str, Any]], seed: int, budget: int,
-              ) -> dict[str, Any]:
-    """One CSV row: identify on ``suite`` with ``budget`` logged steps, score the controller."""
+              exact_reference: tuple[float, float] | None = None) -> dict[str, Any]:
+    """One CSV row: identify on ``suite`` with ``budget`` logged steps, score the controller, and
+    (``exact_reference``: :func:`~pendulum_lqg.scoreboard.exact.exact_reference` of a suite with
+    one fixed plant, else ``None``) its exact stationary J and gap on the linearised plant."""
     from pendulum_lqg.learn.closed_loop import identify_closed_loop
     from pendulum_lqg.scoreboard.linear import controller_file, linear_rows
     from pendulum_lqg.scoreboard.score import optimality_gap, success_figures
@@ -68,23 +78,85 @@ def price_row(suite: Any, reference: list[dict[str, Any]], seed: int, budget: in
                           method="sysid-lqg", seed=seed)
     rows = linear_rows(suite, doc, name=f"sysid-lqg seed {seed} ({budget:,} steps)", nthread=1)
     fig, ref = success_figures(rows), success_figures(reference)
+    exact: dict[str, Any] = dict.fromkeys(COLUMNS[10:15])
+    if exact_reference is not None:
+        from pendulum_lqg.scoreboard.exact import exact_linear
+
+        res = exact_linear(suite, doc, reference=exact_reference)
+        exact = {"exact_J": res.J if res.stable else None, "exact_J_opt": res.J_opt,
+                 "exact_gap": res.gap if res.stable else None,
+                 "exact_episode_gap": res.episode_gap if res.stable else None,
+                 "spectral_radius": res.spectral_radius}
     return {"suite": suite.name, "seed": seed, "budget": budget,
             "logged_steps": final.logged_steps, "stepped_steps": final.stepped_steps,
             "success": fig["success_rate"],
             "score": failure_aware_figures(rows, reference)["score_mean"],
             "J": fig["cost_mean"], "J_ref": ref["cost_mean"],
-            "gap": optimality_gap(rows, reference)["optimality_gap"],
+            "gap": optimality_gap(rows, reference)["optimality_gap"], **exact,
             "wall_seconds": round(wall, 1)}
 
 
-def _done(path: Path) -> list[dict[str, Any]]:
-    from pendulum_lqg.util.files import read_csv
+def read_rows(path: Path, *, where: str) -> list[dict[str, Any]]:
+    """The rows of a price CSV, read at the boundary (a regular file of at most
+    :data:`~pendulum_lqg.util.limits.MAX_INPUT_BYTES`, UTF-8) and checked: the columns
+    :data:`COLUMNS`, a suite name, a seed ≥ 0 and a budget ≥ 1 on every row, numbers or empty
+    cells elsewhere; anything else is one line naming ``where``, the file, the line and the
+    column."""
+    import csv
+    import io
 
-    rows = read_csv(path)
-    if rows and tuple(rows[0]) != COLUMNS:
-        raise ConfigError(f"--resume: {path}: expected the columns {', '.join(COLUMNS)}, got "
-                          f"{', '.join(rows[0])}")
+    from pendulum_lqg.boundary import read_text
+
+    text = read_text(path, where=where)
+    try:
+        table = list(csv.reader(io.StringIO(text, newline="")))
+    except csv.Error as exc:
+        raise ConfigError(f"{where}: {path} is not a CSV file ({exc})") from None
+    if not table or tuple(table[0]) != COLUMNS:
+        raise ConfigError(f"{where}: {path}: expected the columns {', '.join(COLUMNS)}"
+                          + (f", got {', '.join(table[0])}" if table and table[0] else ""))
+    rows = []
+    for line, cells in enumerate(table[1:], start=2):
+        if not cells:
+            continue
+        if len(cells) != len(COLUMNS):
+            raise ConfigError(f"{where}: {path}: line {line}: expected {len(COLUMNS)} cells, "
+                              f"got {len(cells)}")
+        row: dict[str, Any] = {"suite": cells[0]}
+        if not cells[0].strip():
+            raise ConfigError(f"{where}: {path}: line {line}: suite: expected a suite name, "
+                              "got ''")
+        for key, cell in zip(COLUMNS[1:], cells[1:], strict=True):
+            row[key] = _cell(where, path, line, key, cell)
+        rows.append(row)
     return rows
+
+
+def _cell(where: str, path: Path, line: int, key: str, cell: str) -> Any:
+    """One checked cell: an integer (seed ≥ 0, budget ≥ 1, the step counts ≥ 0) or a number
+    (empty: none, e.g. the gap of a controller that never survived)."""
+    if key in ("seed", "budget", "logged_steps", "stepped_steps"):
+        try:
+            value = int(cell)
+        except ValueError:
+            raise ConfigError(f"{where}: {path}: line {line}: {key}: expected an integer, got "
+                              f"{cell!r}") from None
+        low = 1 if key == "budget" else 0
+        if value < low:
+            raise ConfigError(f"{where}: {path}: line {line}: {key}: expected an integer "
+                              f"≥ {low}, got {cell!r}")
+        return value
+    if cell in ("", "None"):
+        return None
+    try:
+        value_f = float(cell)
+    except ValueError:
+        raise ConfigError(f"{where}: {path}: line {line}: {key}: expected a number, got "
+                          f"{cell!r}") from None
+    if math.isnan(value_f):
+        raise ConfigError(f"{where}: {path}: line {line}: {key}: expected a number, got "
+                          f"{cell!r}")
+    return value_f
 
 
 def run(out: Path, *, suites: Sequence[str], seeds: Sequence[int], budgets: Sequence[int],
@@ -95,10 +167,11 @@ def run(out: Path, *, suites: Sequence[str], seeds: Sequence[int], budgets: Sequ
     from pendulum_lqg.scoreboard.suites import load_suite
     from pendulum_lqg.util.files import atomic_write, rows_to_csv
 
-    rows = _done(out) if resume and out.is_file() else []
+    rows = read_rows(out, where="--resume") if resume and out.exists() else []
     done = {(r["suite"], int(r["seed"]), int(r["budget"])) for r in rows}
     loaded = {name: load_suite(name) for name in suites}
     references: dict[str, list[dict[str, Any]]] = {}
+    exact: dict[str, tuple[float, float] | None] = {}
     for seed in seeds:
         for budget in sorted(budgets):
             for name, suite in loaded.items():
@@ -106,13 +179,27 @@ def run(out: Path, *, suites: Sequence[str], seeds: Sequence[int], budgets: Sequ
                     continue
                 if name not in references:
                     references[name] = ep.policy_rows(suite, suite.reference, nthread=1)
-                row = price_row(suite, references[name], seed, budget)
+                if name not in exact:
+                    exact[name] = _exact_reference(suite)
+                row = price_row(suite, references[name], seed, budget, exact[name])
                 rows.append(row)
                 atomic_write(out, rows_to_csv(rows))
                 print(f"{suite.name} seed {seed} budget {budget:,}: {row['logged_steps']:,} "
                       f"logged, success {row['success']:.2f}, score {row['score']:.3f}, gap "
                       f"{_fmt(row['gap'])} ({row['wall_seconds']} s)", file=sys.stderr, flush=True)
     return rows
+
+
+def _exact_reference(suite: Any) -> tuple[float, float] | None:
+    """The exact J* of a suite with one fixed plant; ``None`` where the theory has no single
+    linear loop (a randomised plant: ``mismatch``)."""
+    from pendulum_lqg.errors import PendulumLQGError
+    from pendulum_lqg.scoreboard.exact import exact_reference
+
+    try:
+        return exact_reference(suite)
+    except PendulumLQGError:
+        return None
 
 
 def _fmt(x: Any) -> str:
@@ -256,9 +343,27 @@ def _int_list(text: str, what: str) -> list[int]:
     return values
 
 
+def _suite_list(text: str) -> list[str]:
+    """``--suites``: comma-separated names, each a suite that loads (checked before any work)."""
+    from pendulum_lqg.errors import PendulumLQGError
+    from pendulum_lqg.scoreboard.suites import load_suite
+
+    names = [s.strip() for s in text.split(",") if s.strip()]
+    if not names:
+        raise ConfigError(f"--suites: expected comma-separated suite names, got {text!r}")
+    for name in names:
+        try:
+            load_suite(name)
+        except PendulumLQGError as exc:
+            raise ConfigError(f"--suites: {exc}") from None
+    return list(dict.fromkeys(names))
+
+
 def _parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="python -m pendulum_lqg.learn.price",
-                                 description=__doc__.splitlines()[0])
+    from pendulum_lqg.util.scripts import ScriptParser
+
+    ap = ScriptParser(prog="python -m pendulum_lqg.learn.price",
+                      description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="command", required=True)
     r = sub.add_parser("run", help="identify and score every suite × seed × budget → CSV")
     r.add_argument("--out", type=Path, required=True, help="the CSV to write")
@@ -291,8 +396,17 @@ def _main(args: argparse.Namespace) -> int:
         budgets = _int_list(args.budgets, "budgets")
         if min(budgets) < 1:
             raise ConfigError(f"--budgets: expected positive integers, got {args.budgets!r}")
-        rows = run(out, suites=[s for s in args.suites.split(",") if s],
-                   seeds=_int_list(args.seeds, "seeds"), budgets=budgets, resume=args.resume)
+        if max(budgets) > MAX_BUDGET:
+            raise ConfigError(f"--budgets: at most {MAX_BUDGET:,} logged steps a budget (the "
+                              "identification keeps every logged step in memory), got "
+                              f"{max(budgets):,}")
+        suites = _suite_list(args.suites)
+        seeds = _int_list(args.seeds, "seeds")
+        count = len(set(suites)) * len(set(seeds)) * len(set(budgets))
+        if count > MAX_ROWS:
+            raise ConfigError(f"--budgets: at most {MAX_ROWS:,} runs (suites × seeds × budgets, "
+                              f"each an identification and a score), got {count:,}")
+        rows = run(out, suites=suites, seeds=seeds, budgets=budgets, resume=args.resume)
         print(f"wrote {out} ({len(rows)} rows)")
         return 0
     if not args.csv.is_file():
