@@ -125,7 +125,11 @@ def _suite_problem(suite: Any) -> tuple[Any, Any]:
     scenario = suite.config.scenario
     if not scenario.randomize.is_empty():
         raise ConfigError(f"suite {suite.name!r}: it randomises its plant per episode; the exact "
-                          "gap is for one fixed plant (lecture, noisy, full-state)")
+                          "gap is for one fixed plant (e.g. lecture, noisy)")
+    for name in ("measurement_delay", "actuator_delay", "dropout", "actuator_tau"):
+        if getattr(scenario, name):
+            raise ConfigError(f"suite {suite.name!r}: it sets {name}; the exact gap covers the "
+                              "plain sampled loop (e.g. lecture, noisy)")
     if suite.observes_state:
         raise ConfigError(f"suite {suite.name!r} gives the true state; a linear controller file "
                           "takes y = [p, θ]")
@@ -224,10 +228,13 @@ def exact_builtin(suite: Any, policy: str, *,
 
 def exact_entry(suite: Any, *, doc: dict[str, Any] | None = None, policy: str | None = None,
                 ) -> dict[str, Any]:
-    """The score file's ``exact`` entry of a suite: :meth:`ExactCost.to_dict`, or
-    ``{"reason": …}`` where the theory has no single linear loop for it (one line)."""
+    """The score file's ``exact`` entry of a suite for a controller document ``doc`` or a built-in
+    ``policy``: :meth:`ExactCost.to_dict` without the suite, or ``{"reason": …}`` where the
+    theory has no single linear loop for it (one line)."""
     try:
         res = exact_linear(suite, doc) if doc is not None else exact_builtin(suite, str(policy))
     except PendulumLQGError as exc:
         return {"reason": str(exc)}
-    return res.to_dict()
+    out = res.to_dict()
+    del out["suite"]
+    return out
