@@ -11,16 +11,20 @@
 ``train`` command's) with that budget, scored on the suite's own episodes as ``pendulum-lqg
 score`` scores it (:func:`~pendulum_lqg.scoreboard.linear.linear_rows`, the failure-aware score
 against the suite reference's rows, the optimality gap ``J/J* − 1`` on the episodes both
-survived): one CSV row each (``suite, seed, budget, logged_steps, stepped_steps, success, score,
-J, J_ref, gap, wall_seconds``), the file rewritten atomically after every row, so a run stopped
-half-way keeps what it finished (``--resume`` continues it).
+survived), and on a suite with one fixed plant its exact stationary J and gap on the linearised
+plant (:mod:`pendulum_lqg.scoreboard.exact`): one CSV row each (:data:`COLUMNS`), the file
+rewritten atomically after every row, so a run stopped half-way keeps what it finished
+(``--resume`` continues it).
 
 ``figure``: per suite, the failure-aware score and the gap against the logged env steps (log
 axes; median and interquartile range over the seeds), the deep-RL methods' committed learning
 curves (``METHOD-seedS-curve.csv`` of ``--curves``: their own 20 fixed lecture-like episodes, so
 drawn on the ``lecture`` panel only) on the same axes, and the least-squares slope of
 ``log(median gap)`` against ``log(budget)`` over the budgets whose median gap is positive, beside
-the ``1/N`` rate of certainty equivalence (Mania, Tu & Recht 2019), printed. The x position of a
+the ``1/N`` rate of certainty equivalence (Mania, Tu & Recht 2019), printed; where the CSV has
+the exact gap, that gap of every stabilising run against its logged steps with the slope of
+:func:`exact_slope` and its bootstrap interval over seeds, and the fraction of stabilising
+controllers per budget (:func:`stabilising`). The x position of a
 budget is the budget: it caps the logged steps (a run whose episodes fail early logs fewer, and
 the CSV says how many).
 """
@@ -235,22 +239,93 @@ def gap_slope(rows: list[dict[str, Any]], suite: str) -> tuple[float, float, int
     return float(slope), float(intercept), int(keep.sum())
 
 
+def exact_values(rows: list[dict[str, Any]], suite: str) -> list[dict[str, Any]]:
+    """The runs of ``suite`` the exact theory judged (a spectral radius in the row): ``{"seed",
+    "budget", "steps", "stable", "gap"}``, ``gap`` = ∞ where the loop is unstable."""
+    out = []
+    for r in rows:
+        if r["suite"] != suite or r.get("spectral_radius") in (None, "", "None"):
+            continue
+        gap = _number(r["exact_gap"])
+        stable = float(r["spectral_radius"]) < 1.0 and math.isfinite(gap)
+        out.append({"seed": int(r["seed"]), "budget": int(r["budget"]),
+                    "steps": int(r["logged_steps"]), "stable": stable,
+                    "gap": gap if stable else math.inf})
+    return out
+
+
+def stabilising(rows: list[dict[str, Any]], suite: str,
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(budgets, fraction stabilising, median exact gap, q25, q75)`` per budget over the seeds
+    (an unstable loop's gap is ∞, so a median above half the seeds unstable is ∞)."""
+    judged = exact_values(rows, suite)
+    budgets = sorted({v["budget"] for v in judged})
+    frac, q = np.zeros(len(budgets)), np.full((3, len(budgets)), np.nan)
+    for i, b in enumerate(budgets):
+        at = [v for v in judged if v["budget"] == b]
+        frac[i] = sum(v["stable"] for v in at) / len(at)
+        # order statistics (the inverted CDF): defined with ∞ entries, linear interpolation not
+        q[:, i] = np.percentile([v["gap"] for v in at], [50, 25, 75], method="inverted_cdf")
+    return np.array(budgets, dtype=float), frac, q[0], q[1], q[2]
+
+
+def exact_slope(rows: list[dict[str, Any]], suite: str, *, resamples: int = SLOPE_RESAMPLES,
+                seed: int = SLOPE_SEED) -> dict[str, Any] | None:
+    """The least-squares slope of ``log exact gap`` against ``log logged steps`` over every
+    stabilising run of ``suite`` (pooled over seeds; the logged steps are the samples the fit
+    had, which a budget only caps), and its bootstrap 95 % interval over seeds: the seeds drawn
+    with replacement, each with all its runs, and the line refitted (``resamples`` times, numpy
+    generator ``seed``; a draw with fewer than two distinct step counts is skipped). ``None``
+    without two such runs. ``{"slope", "intercept", "ci", "runs", "seeds"}``."""
+    pts = [v for v in exact_values(rows, suite) if v["stable"] and v["gap"] > 0]
+
+    def fit(sample: list[dict[str, Any]]) -> tuple[float, float] | None:
+        x = np.log([v["steps"] for v in sample])
+        if len(set(x.tolist())) < 2:
+            return None
+        slope, intercept = np.polyfit(x, np.log([v["gap"] for v in sample]), 1)
+        return float(slope), float(intercept)
+
+    best = fit(pts) if pts else None
+    if best is None:
+        return None
+    seeds = sorted({v["seed"] for v in pts})
+    by_seed = {s: [v for v in pts if v["seed"] == s] for s in seeds}
+    rng = np.random.default_rng(seed)
+    draws = [fit([v for k in rng.choice(seeds, size=len(seeds)) for v in by_seed[int(k)]])
+             for _ in range(resamples)]
+    slopes = [d[0] for d in draws if d is not None]
+    lo, hi = np.percentile(slopes, [2.5, 97.5]) if slopes else (math.nan, math.nan)
+    return {"slope": best[0], "intercept": best[1], "ci": (float(lo), float(hi)),
+            "runs": len(pts), "seeds": len(seeds)}
+
+
 def read_curves(folder: Path) -> dict[str, list[dict[str, np.ndarray]]]:
     """``{method: [run columns]}`` of the model-free methods' ``METHOD-seedS-curve.csv`` files in
     ``folder``: the SB3 methods and ARS from zero, trained at the suite's own noise (the noise
     ladder's runs, ``METHOD-noiseX``, play another problem; the identification and clone runs are
     the model-based side this figure draws on its own)."""
+    import csv
+    import io
+
+    from pendulum_lqg.boundary import read_text
     from pendulum_lqg.learn.methods import METHODS
-    from pendulum_lqg.util.files import read_csv
 
     model_free = {name for name, m in METHODS.items() if m.extra} | {"ars-history"}
     out: dict[str, list[dict[str, np.ndarray]]] = {}
     for path in sorted(folder.glob("*-curve.csv")):
         match = CURVE_FILE.match(path.name)
-        rows = read_csv(path) if match and match["method"] in model_free else []
+        # read at the boundary: a regular file of bounded size (a FIFO or a device is refused)
+        rows = list(csv.DictReader(io.StringIO(read_text(path, where="--curves"), newline=""))) \
+            if match and match["method"] in model_free else []
         if rows and {"env_steps", "score_mean"} <= set(rows[0]):
-            out.setdefault(match["method"] if match else "", []).append(
-                {k: np.array([_number(r[k]) for r in rows]) for k in ("env_steps", "score_mean")})
+            try:
+                cols = {k: np.array([_number(r[k]) for r in rows])
+                        for k in ("env_steps", "score_mean")}
+            except (TypeError, ValueError):
+                raise ConfigError(f"--curves: {path}: env_steps, score_mean: expected numbers "
+                                  "on every row") from None
+            out.setdefault(match["method"] if match else "", []).append(cols)
     return out
 
 
@@ -275,8 +350,8 @@ def draw(rows: list[dict[str, Any]], curves: dict[str, list[dict[str, np.ndarray
 
     suites = [s for s in SUITES if any(r["suite"] == s for r in rows)] or \
         sorted({str(r["suite"]) for r in rows})
-    fig = Figure(figsize=(5.0 * len(suites), 8.0), layout="constrained")
-    axes = np.array(fig.subplots(2, len(suites), squeeze=False))
+    fig = Figure(figsize=(5.0 * len(suites), 15.0), layout="constrained")
+    axes = np.array(fig.subplots(4, len(suites), squeeze=False))
     slopes = {}
     for col, suite in enumerate(suites):
         steps, med, q25, q75 = summary(rows, suite, "score")
@@ -305,31 +380,80 @@ def draw(rows: list[dict[str, Any]], curves: dict[str, list[dict[str, np.ndarray
         bottom.set(xscale="log", yscale="log", ylabel="gap J/J* − 1 (positive part)",
                    xlabel="logged env-step budget")
         bottom.legend(fontsize=7)
+        _exact_panels(axes[2, col], axes[3, col], rows, suite)
     fig.suptitle("The price of not knowing the model: closed-loop identification + LQG\n"
-                 "(median and IQR over data seeds; each suite's 100 episodes)", fontsize=10)
+                 "(Monte Carlo: median and IQR over data seeds of each suite's 100 episodes; "
+                 "exact: the linearised plant's stationary J)", fontsize=10)
     from pendulum_lqg.util.files import save_figure
 
     save_figure(fig, path, where="--out", what="figure", dpi=120)
     return slopes
 
 
+def _exact_panels(gap_ax: Any, frac_ax: Any, rows: list[dict[str, Any]], suite: str) -> None:
+    """The exact gap of every stabilising run against its logged steps (each seed, the median
+    per budget, the fit of :func:`exact_slope` and a 1/N line through its middle), and the
+    fraction of stabilising controllers against the budget."""
+    judged = exact_values(rows, suite)
+    if not judged:
+        for ax in (gap_ax, frac_ax):
+            ax.text(0.5, 0.5, f"{suite}: no exact gap\n(no single linear loop: e.g. a plant "
+                    "randomised per episode)", ha="center", va="center", transform=ax.transAxes,
+                    fontsize=8)
+            ax.set_axis_off()
+        return
+    for seed in sorted({v["seed"] for v in judged}):
+        pts = sorted((v["steps"], v["gap"]) for v in judged if v["seed"] == seed and v["stable"])
+        gap_ax.plot(*np.array(pts).T, ".-", lw=0.5, alpha=0.5, label=f"seed {seed}")
+    budgets, frac, med, _, _ = stabilising(rows, suite)
+    steps = np.array([np.median([v["steps"] for v in judged if v["budget"] == b]) for b in budgets])
+    ok = np.isfinite(med)
+    gap_ax.plot(steps[ok], med[ok], "o", color="k", label="median over seeds (at median steps)")
+    fit = exact_slope(rows, suite)
+    if fit is not None:
+        x = np.geomspace(steps[ok].min(), steps[ok].max(), 20)
+        lo, hi = fit["ci"]
+        gap_ax.plot(x, np.exp(fit["intercept"]) * x ** fit["slope"], color="C3",
+                    label=f"fit: slope {fit['slope']:.2f} [95 %: {lo:.2f}, {hi:.2f}]")
+        mid = math.sqrt(x[0] * x[-1])
+        gap_ax.plot(x, np.exp(fit["intercept"]) * mid ** fit["slope"] * mid / x, color="C0",
+                    ls=":", label="1/N")
+    gap_ax.set(xscale="log", yscale="log", ylabel="exact gap J/J* − 1 (stationary)",
+               xlabel="logged env steps (each run's own)")
+    gap_ax.legend(fontsize=6)
+    frac_ax.plot(budgets, frac, "s-", color="k")
+    frac_ax.set(xscale="log", ylim=(-0.05, 1.05), xlabel="logged env-step budget",
+                ylabel="fraction of seeds stabilising (ρ < 1)")
+
+
 def table_lines(rows: list[dict[str, Any]]) -> list[str]:
     """The figure's numbers as a Markdown table: per suite and budget, the seeds' runs, the median
     logged steps, and the median [IQR] of the success rate, the failure-aware score and the gap."""
     out = ["| suite | budget | runs | logged steps (median) | success | failure-aware score "
-           "| gap J/J* − 1 |", "|---|---|---|---|---|---|---|"]
+           "| gap J/J* − 1 | exact gap (stationary) | stabilising |",
+           "|---|---|---|---|---|---|---|---|---|"]
 
     def cell(med: float, lo: float, hi: float, fmt: str) -> str:
         return "–" if not np.isfinite(med) else f"{med:{fmt}} [{lo:{fmt}}, {hi:{fmt}}]"
 
+    def exact_cell(med: float, lo: float, hi: float) -> str:
+        return " [".join(f"{v:+.4f}" if np.isfinite(v) else "∞" for v in (med, lo)) + \
+            (f", {hi:+.4f}]" if np.isfinite(hi) else ", ∞]")
+
     for suite in sorted({str(r["suite"]) for r in rows}, key=lambda s: (s not in SUITES, s)):
         stats = {k: summary(rows, suite, k) for k in ("success", "score", "gap", "logged_steps")}
+        exact = stabilising(rows, suite)
         for i, budget in enumerate(stats["score"][0]):
             runs = sum(1 for r in rows if r["suite"] == suite and int(r["budget"]) == budget)
+            j = np.flatnonzero(exact[0] == budget)
+            judged = [v["stable"] for v in exact_values(rows, suite) if v["budget"] == budget]
+            tail = ("– | –" if not j.size else
+                    f"{exact_cell(exact[2][j[0]], exact[3][j[0]], exact[4][j[0]])} | "
+                    f"{sum(judged)}/{len(judged)}")
             out.append(f"| {suite} | {int(budget):,} | {runs} | {stats['logged_steps'][1][i]:,.0f} | "
                        + " | ".join(cell(stats[k][1][i], stats[k][2][i], stats[k][3][i], f)
                                     for k, f in (("success", ".2f"), ("score", ".3f"),
-                                                 ("gap", "+.4f"))) + " |")
+                                                 ("gap", "+.4f"))) + f" | {tail} |")
     return out
 
 
@@ -386,7 +510,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _main(args: argparse.Namespace) -> int:
-    from pendulum_lqg.util.files import output_file, read_csv
+    from pendulum_lqg.util.files import output_file
 
     out = output_file("--out", args.out)
     if out.exists() and not args.force and not getattr(args, "resume", False):
@@ -409,11 +533,9 @@ def _main(args: argparse.Namespace) -> int:
         rows = run(out, suites=suites, seeds=seeds, budgets=budgets, resume=args.resume)
         print(f"wrote {out} ({len(rows)} rows)")
         return 0
-    if not args.csv.is_file():
-        raise ConfigError(f"csv: {args.csv}: no such file")
-    rows = read_csv(args.csv)
-    if not rows or tuple(rows[0]) != COLUMNS:
-        raise ConfigError(f"csv: {args.csv}: expected the columns {', '.join(COLUMNS)}")
+    rows = read_rows(args.csv, where="csv")
+    if not rows:
+        raise ConfigError(f"csv: {args.csv}: no rows")
     table = None if args.table is None else output_file("--table", args.table)
     if table is not None and table.exists() and not args.force:
         raise ConfigError(f"--table: {table} exists; give --force to replace it")
@@ -426,6 +548,11 @@ def _main(args: argparse.Namespace) -> int:
         atomic_write(table, "\n".join(lines) + "\n")
     for suite, (slope, _, count) in draw(rows, curves, out).items():
         print(f"{suite}: gap slope {slope:.2f} over {count} budgets (1/N: −1)")
+        fit = exact_slope(rows, suite)
+        if fit is not None:
+            print(f"{suite}: exact gap slope {fit['slope']:.2f} [95 % over seeds: "
+                  f"{fit['ci'][0]:.2f}, {fit['ci'][1]:.2f}] over {fit['runs']} stabilising runs "
+                  f"of {fit['seeds']} seeds (1/N: −1)")
     print(f"wrote {out}")
     return 0
 
