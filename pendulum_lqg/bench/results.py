@@ -399,7 +399,8 @@ def _lti_markdown_table(source: LTISource, spec: ExperimentSpec, summary: dict[s
             "failures"]
     lines = [f"**{spec.name}** — LTI plant `{Path(source.path).name}`, {spec.episodes} "
              f"episodes per configuration, seed {spec.seed}; {THEORY_CAPTION} "
-             "(`pendulum-lqg theory --lti`); the loop radius is its spectral radius", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+             "(`pendulum-lqg theory --lti`); the loop radius is its spectral radius", "",
+             "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for c in summary["configurations"]:
         s = c["summary"]
         if s is None:

@@ -111,6 +111,14 @@ def add_theory_parser(sub: Any) -> None:
                    help="a plant file (as --plant FILE; kept for one release); policies "
                         "dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
                         "dlqr+none, dlqr+kalman, dlqr+luenberger)")
+    p.add_argument("--agent", default=None, metavar="linear:FILE",
+                   help="a linear controller file (linear:FILE.json, e.g. "
+                        "linear:experiments/agents/models/sysid-lqg-seed0.json) instead of "
+                        "POLICY: its exact stationary J on the suite's plant linearised, and the "
+                        "exact gap J/J* − 1 to the suite's reference (--suite)")
+    p.add_argument("--suite", default=None, metavar="S",
+                   help="with --agent: the suite whose plant, noise, period and cost the loop has "
+                        "(a name or a file; default lecture)")
     add_flags(p, "theory")              # the declared settings (problem/), theory's front end
     p.add_argument("--theta0", type=Kind("Finite"), default=defaults.X0[1],
                    help=f"initial pole angle in rad of the episode the expected RMS is taken over "

@@ -112,11 +112,11 @@ def _print_score(doc: dict[str, Any]) -> None:
 
     print(f"score of {doc['policy']} ({doc['kind']})")
     print("| suite | episodes | success [95 % CI] | J (successes) | gap to reference [95 % CI] | "
-          "reference: success, J | full-state LQR: success, J |")
-    print("|---|---|---|---|---|---|---|")
+          "exact gap: stationary, episode | reference: success, J | full-state LQR: success, J |")
+    print("|---|---|---|---|---|---|---|---|")
     for name, e in doc["suites"].items():
         if not e["applicable"]:
-            print(f"| {name} | {e['episodes']} | not applicable: {e['reason']} | | | | |")
+            print(f"| {name} | {e['episodes']} | not applicable: {e['reason']} | | | | | |")
             continue
         lo, hi = e["success_ci"]
         glo, ghi = e["gap_ci"]
@@ -124,10 +124,21 @@ def _print_score(doc: dict[str, Any]) -> None:
         ref, full = e["reference"], e["full_state_bound"]
         cost = f(e["cost_mean"], ".3g") + ("" if e["cost_se"] is None else f" ± {e['cost_se']:.2g}")
         print(f"| {name} | {e['episodes']} | {100 * e['success_rate']:.0f} % [{100 * lo:.0f}, "
-              f"{100 * hi:.0f}] | {cost} | {gap} | {ref['policy']}: "
+              f"{100 * hi:.0f}] | {cost} | {gap} | {_exact_cell(e.get('exact'))} | {ref['policy']}: "
               f"{100 * ref['success_rate']:.0f} %, {f(ref['cost_mean'], '.3g')} | "
               f"{100 * full['success_rate']:.0f} %, {f(full['cost_mean'], '.3g')} |")
     sys.stdout.flush()
+
+
+def _exact_cell(exact: dict[str, Any] | None) -> str:
+    """The exact gap's cell (:mod:`pendulum_lqg.scoreboard.exact`): ``+0.0200, +0.0162``, the
+    unstable linear loop, or – where the theory has no single linear loop (a plug-in, a
+    randomised plant, delays)."""
+    if exact is None or "reason" in exact:
+        return "–"
+    if not exact["stable"]:
+        return f"unstable (radius {exact['spectral_radius']:.4f})"
+    return f"{exact['gap']:+.4f}, {exact['episode_gap']:+.4f}"
 
 
 def cmd_board(args: argparse.Namespace) -> int:

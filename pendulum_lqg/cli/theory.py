@@ -42,6 +42,13 @@ def cmd_theory(args: argparse.Namespace) -> int:
     from pendulum_lqg.names import LECTURE_POLICIES
     from pendulum_lqg.policies.theory import lecture_theory
 
+    if args.agent is not None:
+        return _agent_theory(args)
+    if args.suite is not None:
+        from pendulum_lqg.errors import ConfigError
+
+        raise ConfigError("--suite: goes with --agent linear:FILE (the theory of POLICY takes "
+                          "the scenario's flags)")
     if not is_cartpole(args.plant_ref):
         return _lti_theory(args)
     plant = load_plant(args.model)
@@ -63,6 +70,41 @@ def cmd_theory(args: argparse.Namespace) -> int:
                                   f"x0 = {list(scenario.x0)}, x̂0 "
                                   f"{'= x0' if scenario.estimate0 == 'true' else '= 0'}",
                          scenario.burn_in)
+    return 0
+
+
+def _agent_theory(args: argparse.Namespace) -> int:
+    """``theory --agent linear:FILE [--suite S]``: the controller file's exact stationary J on
+    the suite's plant linearised, J* of the suite's reference and the exact gap
+    (:mod:`pendulum_lqg.scoreboard.exact`)."""
+    from pendulum_lqg.cli.parser import jsonable
+    from pendulum_lqg.errors import ConfigError
+    from pendulum_lqg.model.catalog import is_cartpole
+    from pendulum_lqg.scoreboard.exact import exact_linear
+    from pendulum_lqg.scoreboard.linear import linear_agent
+    from pendulum_lqg.scoreboard.suites import load_suite
+
+    if not args.agent.startswith("linear:"):
+        raise ConfigError(f"--agent: expected linear:FILE.json (a linear controller file), got "
+                          f"{args.agent!r}")
+    if args.policies or not is_cartpole(args.plant_ref):
+        raise ConfigError("--agent: give POLICY, --plant or --agent, not more than one")
+    factory = linear_agent(args.agent.removeprefix("linear:"))
+    suite = load_suite(args.suite if args.suite is not None else "lecture")
+    res = exact_linear(suite, factory.doc)
+    if args.json:
+        print(json.dumps(jsonable({"agent": args.agent, "suite": suite.name,
+                                   "reference": suite.reference, **res.to_dict()}), indent=2))
+        return 0
+    print(f"theory of {args.agent} on suite {suite.name} (its plant linearised, limits off; "
+          f"J over {suite.config.scenario.duration:g} s)")
+    verdict = "stable" if res.stable else "unstable: the linear loop's states grow without bound"
+    print(f"spectral radius {res.spectral_radius:.6f}: {verdict}")
+    if res.stable:
+        print(f"stationary J {res.J:.6g}, J* ({suite.reference}) {res.J_opt:.6g}: exact gap "
+              f"{res.gap:+.6f}")
+        print(f"over one episode from x0: E[J] {res.episode_J:.6g}, E[J*] {res.episode_J_opt:.6g}: "
+              f"gap {res.episode_gap:+.6f} (what score's Monte Carlo gap estimates)")
     return 0
 
 

@@ -100,7 +100,7 @@ def _share_above(tau: float) -> Any:
 LINE_STYLES = ("-", "--", ":", "-.")
 
 
-def method_styles(methods: list[str]) -> dict[str, dict[str, str]]:
+def method_styles(methods: list[str]) -> dict[str, dict[str, Any]]:
     """A colour and a line style per method, sorted by name: the ten colours of ``tab10`` with
     the first line style, then again with the next (distinct for up to 40 methods)."""
     return {m: {"color": f"C{i % 10}", "ls": LINE_STYLES[(i // 10) % len(LINE_STYLES)]}

@@ -199,16 +199,29 @@ def policy_theory(plant: Plant, scenario: Scenario, policy: Any, *,
     expected RMS over one episode of the scenario from its ``x0``, ``x0_std`` and ``estimate0``,
     the RMS after its ``burn_in`` (:func:`episode_theory`).
     """
+    _plant_kind(scenario, plant_kind)          # the scenario's errors before the policy's
+    prob, lims = linear_problem(plant, scenario, np.asarray(policy.K, dtype=float),
+                                linear_estimator(policy), plant_kind=plant_kind)
+    return stationary(prob, name=str(policy.name), duration=scenario.n_periods * prob.k * prob.h,
+                      limits=lims,
+                      start=episode_start(scenario.x0, scenario.x0_std, scenario.estimate0, policy),
+                      burn_in=scenario.burn_in)
+
+
+def linear_problem(plant: Plant, scenario: Scenario, K: np.ndarray, estimator: Any, *,
+                   plant_kind: str | None = None,
+                   ) -> tuple[StationaryProblem, dict[str, float]]:
+    """The :class:`StationaryProblem` of gain ``K`` and ``estimator`` (a
+    :class:`~pendulum_lqg.policies.closed_loop.LinearEstimator`) on ``plant``'s linearisation
+    under ``scenario``'s noise, period and cost (:func:`policy_theory`'s rules), and the limits
+    in force ``{"theta_max", "track_limit", "force_limit"}``. Any linear compensator written as
+    an estimator and a gain takes this path (:mod:`pendulum_lqg.scoreboard.exact`)."""
     from pendulum_lqg.core.physics.linear import LinearPhysics
     from pendulum_lqg.core.rules import limits
     from pendulum_lqg.model.linearize import linearize
     from pendulum_lqg.model.plant import steps_per_period
 
-    kind = plant_kind or (scenario.plant if scenario.plant != "mujoco" else "linear-zoh")
-    if kind not in ("linear-zoh", "linear-euler"):
-        raise ConfigError(f"plant: expected 'linear-zoh' or 'linear-euler' for the theory, got "
-                          f"{kind!r}")
-    _check_linear_scenario(scenario)
+    kind = _plant_kind(scenario, plant_kind)
     k = steps_per_period(plant, scenario.control_period)
     phys = LinearPhysics(plant, kind, k)
     s2 = scenario.noise.scale * scenario.noise.scale      # inf, not OverflowError, past 1e154
@@ -216,13 +229,21 @@ def policy_theory(plant: Plant, scenario: Scenario, policy: Any, *,
     prob = StationaryProblem(
         kind=kind, Phi=phys.Phi, Gamma=phys.Gamma[:, None], k=k, h=plant.timestep,
         C=linearize(plant).C,                       # the sensors y = [p, θ] of the MJCF
-        K=np.asarray(policy.K, dtype=float), estimator=linear_estimator(policy),
+        K=np.asarray(K, dtype=float), estimator=estimator,
         Wd=scenario.noise.W * (k * plant.timestep) * s2, V=scenario.noise.V * s2,
         Q=np.diag(scenario.cost_Q), R=np.array([[scenario.cost_R]]))
-    return stationary(prob, name=str(policy.name), duration=scenario.n_periods * k * plant.timestep,
-                      limits={"theta_max": theta_max, "track_limit": track, "force_limit": u_max},
-                      start=episode_start(scenario.x0, scenario.x0_std, scenario.estimate0, policy),
-                      burn_in=scenario.burn_in)
+    return prob, {"theta_max": theta_max, "track_limit": track, "force_limit": u_max}
+
+
+def _plant_kind(scenario: Scenario, plant_kind: str | None) -> str:
+    """The linear plant of the theory (``plant_kind``, else the scenario's; ``linear-zoh`` for
+    ``mujoco``), the scenario checked to be the plain sampled loop."""
+    kind = plant_kind or (scenario.plant if scenario.plant != "mujoco" else "linear-zoh")
+    if kind not in ("linear-zoh", "linear-euler"):
+        raise ConfigError(f"plant: expected 'linear-zoh' or 'linear-euler' for the theory, got "
+                          f"{kind!r}")
+    _check_linear_scenario(scenario)
+    return kind
 
 
 def _check_linear_scenario(scenario: Scenario) -> None:

@@ -16,6 +16,7 @@ module            concept
 ``obs_design``    what an RL agent's network sees, the same in training and scoring
 ``linear``        linear controllers of a y/u history as files (``--agent linear:FILE``)
 ``stats``         the failure-aware score and its aggregates across training runs
+``exact``         the exact stationary J and gap of a linear controller on the plant's linearisation
 ================  ================================================================================
 
 ``pendulum-lqg score POLICY`` / ``--agent REF`` and ``pendulum-lqg board DIR`` are the commands.

@@ -249,7 +249,8 @@ def make_board(folder: Path, *, warn: Callable[[str], None] | None = None) -> st
               "over episodes (n/a: no rows of the suite's reference in the folder). Designed on: "
               "the model the suite's reference, its full-state bound and every built-in entry are "
               "designed on — the plant played where the suite fixes its plant (its LTI file for a "
-              "plant given as matrices), the nominal MJCF where it randomises it (blank: score files that do not say)."]
+              "plant given as matrices), the nominal MJCF where it randomises it (blank: score "
+              "files that do not say)."]
     lines += methods_table(scores, suites, prints)
     if stale:
         lines += ["", "Not comparable (another suite version or episode count): "

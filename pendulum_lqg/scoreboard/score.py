@@ -118,7 +118,9 @@ def score_document(policy: str, kind: str, suites: Sequence[Suite],
     """The score file of ``policy``: ``{"policy", "kind", "score_version", "versions", "suites":
     {name: {"applicable", "episodes", "success_rate", "success_ci", "cost_mean", "cost_se",
     "optimality_gap", "gap_ci", "gap_episodes", "score_mean", "score_ci", "reference",
-    "full_state_bound", "version", "fingerprint", "designed_on", "rows"}}}`` (``designed_on``:
+    "full_state_bound", "version", "fingerprint", "designed_on", "rows"}}}`` (``score_entry``
+    adds ``exact``, :func:`~pendulum_lqg.scoreboard.exact.exact_entry`, for a linear controller
+    file or a built-in policy) (``designed_on``:
     what the reference and the built-in designs are designed on,
     :func:`~pendulum_lqg.scoreboard.suites.designed_on`), and the ``run`` keys (``method``,
     ``seed``: one training run of a method, which ``board`` aggregates) where given; a suite the
@@ -190,6 +192,7 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
                       lambda: ep.full_state_rows(s, nthread=nthread))
 
     rows_of: Callable[[Suite], list[dict[str, Any]]]
+    factory: Any = None
     if agent is not None:
         factory = ep.load_agent(agent, base_dir=base_dir)
         normalized = normalize_action or guard(
@@ -201,14 +204,32 @@ def score_entry(suites: Sequence[Suite], *, policy: str | None = None, agent: st
     else:
         assert policy is not None
         if not policy:
-            raise ConfigError("policy: expected 'controller+observer' or a plug-in MODULE:ATTR, "
-                              "got ''")
+            raise ConfigError("policy: expected 'controller+observer' or a plug-in MODULE:ATTR, got ''")
         name, kind = policy, ("plugin" if is_plugin_ref(policy) else "builtin")
         run, extra_versions = _run_of(None)
         rows_of = _policy_rows_of(policy, kind, reference_of, base_dir, nthread)
     doc = score_document(name, kind, suites, rows_of, reference_of, bound_of,
                          {**versions(), **extra_versions}, on_suite, run)
+    _add_exact(doc, suites, factory=factory, policy=policy if kind == "builtin" else None)
     return doc if noise_scale is None else {**doc, "noise_scale": noise_scale}
+
+
+def _add_exact(doc: dict[str, Any], suites: Sequence[Suite], *, factory: Any,
+               policy: str | None) -> None:
+    """Each applicable suite entry's ``exact``: the exact stationary J and gap of a linear
+    controller file or a built-in policy on the suite's plant linearised
+    (:func:`~pendulum_lqg.scoreboard.exact.exact_entry`, ``{"reason"}`` where the theory has no
+    single linear loop); nothing for plug-ins and other agents."""
+    from pendulum_lqg.scoreboard.exact import exact_entry
+    from pendulum_lqg.scoreboard.linear import LinearFactory
+
+    doc_of = factory.doc if isinstance(factory, LinearFactory) else None
+    if doc_of is None and policy is None:
+        return
+    for s in suites:
+        entry = doc["suites"][s.name]
+        if entry.get("applicable"):
+            entry["exact"] = exact_entry(s, doc=doc_of, policy=policy)
 
 
 def _policy_rows_of(policy: str, kind: str, reference_of: Callable[[Suite], list[dict[str, Any]]],

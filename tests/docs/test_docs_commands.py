@@ -168,7 +168,7 @@ REDUCED: dict[str, tuple[str, str]] = {
          "--steps 400 --eval-every 200 --out runs/clone", "a training run of 300 000 env steps: 400"),
     "uv run python -m pendulum_lqg.learn.price run --out docs/leaderboard/price.csv --force":
         ("python -m pendulum_lqg.learn.price run --suites lecture --seeds 0 --budgets 5000 "
-         "--out price.csv", "70 identifications of up to 500 000 steps: one of 5 000, into the "
+         "--out price.csv", "80 identifications of up to 500 000 steps: one of 5 000, into the "
          "scratch folder (the figure below reads the committed CSV)"),
 }
 #: commands that need the ``rl`` extra (torch, stable-baselines3): documented command → the
