@@ -97,6 +97,8 @@ REDUCED: dict[str, tuple[str, str]] = {
         ("pendulum-lqg bench reduced/noise.toml --out results_small/noise --force --quiet", _BENCH),
     "uv run pendulum-lqg bench lecture_unbounded":
         ("pendulum-lqg bench reduced/lecture_unbounded.toml --quiet", _BENCH),
+    "uv run pendulum-lqg bench double_cartpole --episodes 200":
+        ("pendulum-lqg bench reduced/double_cartpole.toml --quiet", _BENCH),
     "uv run pendulum-lqg bench double_integrator --episodes 200":
         ("pendulum-lqg bench reduced/double_integrator.toml --quiet", _BENCH),
     "uv run pendulum-lqg bench observers": ("pendulum-lqg bench reduced/observers.toml --quiet", _BENCH),
@@ -106,8 +108,8 @@ REDUCED: dict[str, tuple[str, str]] = {
     "uv run pendulum-lqg bench delay": ("pendulum-lqg bench reduced/delay.toml --quiet", _BENCH),
     "uv run pendulum-lqg bench lecture --record recordings/":
         ("pendulum-lqg bench reduced/lecture.toml --record recordings/ --quiet", _BENCH),
-    "uv run pendulum-lqg run --lti experiments/lti/double_integrator.toml --episodes 200 --duration 50":
-        ("pendulum-lqg run --lti experiments/lti/double_integrator.toml --episodes 4 --duration 1",
+    "uv run pendulum-lqg run --plant experiments/lti/double_integrator.toml --episodes 200 --duration 50":
+        ("pendulum-lqg run --plant experiments/lti/double_integrator.toml --episodes 4 --duration 1",
          "200 episodes of 50 s: 4 of 1 s"),
     "pendulum-lqg score --agent experiments/agents/zero_force.py:make --suite lecture --episodes 2":
         ("pendulum-lqg score --agent experiments/agents/zero_force.py:make --suite lecture "
@@ -532,8 +534,9 @@ def reduced_experiment(name: str) -> dict:
     unchanged, a relative plant file made absolute."""
     doc = tomllib.loads((ROOT / "experiments" / f"{name}.toml").read_text(encoding="utf-8"))
     doc["episodes"] = REDUCED_EPISODES
-    if "lti_file" in doc:
-        doc["lti_file"] = str(ROOT / "experiments" / doc["lti_file"])
+    for key in ("lti_file", "plant"):           # a plant file (a shipped NAME has no suffix)
+        if key in doc and Path(doc[key]).suffix:
+            doc[key] = str(ROOT / "experiments" / doc[key])
     if "study" not in doc:
         doc.setdefault("scenario", {})["duration"] = REDUCED_DURATION_S
     doc["grid"] = {k: v[:REDUCED_GRID_VALUES] for k, v in doc.get("grid", {}).items()}
@@ -710,7 +713,7 @@ def _check_output(cmd: Command, proc: subprocess.CompletedProcess) -> None:
             assert out.strip() == f"pendulum-lqg {pendulum_lqg.__version__}"
         elif "--help" in argv or "-h" in argv:
             assert out.startswith("usage: pendulum-lqg"), out
-        elif argv[0] == "design" and "--lti" in argv:      # a plant given as matrices
+        elif argv[0] == "design" and _plant_file(argv):     # a plant file's plant
             if "--json" in argv:
                 d = json.loads(out)
                 assert len(d["K_dlqr"]) == len(d["inputs"])
@@ -730,7 +733,7 @@ def _check_output(cmd: Command, proc: subprocess.CompletedProcess) -> None:
             doc = json.loads(out)
             assert len(doc["episodes"]) == n and 0.0 <= doc["success_rate"] <= 1.0
             assert all(r["cost"] > 0 for r in doc["episodes"])
-        elif argv[0] == "run" and "--lti" not in argv:
+        elif argv[0] == "run" and not _plant_file(argv):
             n = int(argv[argv.index("--episodes") + 1]) if "--episodes" in argv else 100
             m = re.search(r"success: (\d+)/(\d+) = ", out)
             assert m is not None and int(m.group(2)) == n, out
@@ -738,6 +741,14 @@ def _check_output(cmd: Command, proc: subprocess.CompletedProcess) -> None:
             assert out.strip() or proc.stderr.strip(), f"{cmd.where}: prints nothing to check"
     elif cmd.kind == "python" and "-c" not in argv:
         assert out.strip() or proc.stderr.strip(), f"{cmd.where}: prints nothing to check"
+
+
+def _plant_file(argv: list[str]) -> bool:
+    """The command plays a plant other than the cart-pole (``--plant NAME|FILE``, ``--lti``)."""
+    for flag in ("--plant", "--lti"):
+        if flag in argv and argv[argv.index(flag) + 1] not in ("cartpole",):
+            return True
+    return False
 
 
 @pytest.mark.parametrize("cmd", [_param(c) for c in COMMANDS])

@@ -232,3 +232,16 @@ def test_bench_takes_the_experiment_key_plant_and_lti_file_as_its_alias(tmp_path
     exp.write_text(f'name = "both"\nplant = "{di}"\nlti_file = "{di}"\n')
     with pytest.raises(ConfigError, match="lti_file: not with plant"):
         parse_spec(tomllib.loads(exp.read_text()))
+
+
+def test_item6_theory_sets_each_limited_state_against_its_limit(capsys):
+    """Issue 55 item 6: a state the plant file limits is set against that limit, not "(no
+    limit)"; its σ-distance is limit / std of the stationary theory."""
+    assert main(["theory", "--plant", "double-cartpole", "--json"]) == 0
+    kalman = json.loads(capsys.readouterr().out)["policies"]["dlqr+kalman"]
+    verdict = " ".join(kalman["verdict"].split())
+    assert "no limit" not in verdict
+    for state, limit in (("p", 1.8), ("theta1", 0.5), ("theta2", 0.5)):
+        sigma = limit / kalman["std"][state]
+        assert f"std {state} = {kalman['std'][state]:.2g} (its limit ±{limit:g} is {sigma:.1f} σ " \
+               f"away)" in verdict
