@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.learn.methods import ARS_STEPS
 from pendulum_lqg.learn.runs import RunContext, Stopped, run_root, versions, write_json
 
 CHECKPOINT = "-checkpoint.json"
@@ -50,7 +51,7 @@ class ARSSettings:
     frames: int = 64
     directions: int = 16
     top: int = 8
-    steps: int = 300_000
+    steps: int = ARS_STEPS                  # what the committed runs used
 
 
 class RunningStats:

@@ -89,7 +89,8 @@ class ClosedLoopSettings:
     episodes : episodes per closed-loop round (of the suite's duration) in the default recipe.
         Thirty 10 s episodes per round: enough for a model whose one-step prediction error on
         held-out data is the true model's Kalman predictor's; the default recipe logs at most
-        70 000 steps (episodes that fail end early).
+        70 020 steps: whole bursts covering ``open_loop_steps`` (⌈10 000/30⌉ · 30 = 10 020), then
+        the rounds' episodes (episodes that fail end early).
     open_loop_steps : logged steps of open-loop bursts (at most a fifth of a given budget).
         Enough for a 4-number model that stabilises under the cautious filter.
     burst : periods of one open-loop burst. The pole falls from θ₀ in about half a second.
