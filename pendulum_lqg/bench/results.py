@@ -28,7 +28,6 @@ import csv
 import functools
 import hashlib
 import json
-import shutil
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -40,7 +39,7 @@ from pendulum_lqg.boundary import read_bytes
 from pendulum_lqg.boundary.schemas import unit_record
 from pendulum_lqg.core.metrics import summarize, summary_metrics
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.util.files import FileLock, atomic_write, read_csv, rows_to_csv
+from pendulum_lqg.util.files import FileLock, atomic_write, read_csv, remove_entry, rows_to_csv
 from pendulum_lqg.version import SCHEMA_VERSION, versions
 
 if TYPE_CHECKING:
@@ -128,7 +127,7 @@ class ResultsDir:
             for child in self.path.iterdir():
                 if child == self.lock:
                     continue
-                shutil.rmtree(child) if child.is_dir() else child.unlink()
+                remove_entry(child)           # a link is removed, never its target
         self.units_dir.mkdir(exist_ok=True)
         self._spec = spec
         atomic_write(spec_file, json.dumps(record, indent=2, sort_keys=True, default=str) + "\n")

@@ -67,6 +67,23 @@ def read_bytes(path: str | os.PathLike[str], *, where: str) -> bytes:
         os.close(fd)
 
 
+def regular_file(path: str | os.PathLike[str], *, where: str) -> Path:
+    """``path`` checked to be a regular file (a symbolic link followed) before a library that
+    opens it by name reads it (an SB3 model, a pickle of statistics): missing, a folder, a FIFO (it
+    would hang the reader) or a device (it would grow it) is one :class:`ConfigError` line
+    starting with ``where``."""
+    p = Path(path)
+    try:
+        mode = os.stat(p).st_mode
+    except FileNotFoundError:
+        raise ConfigError(f"{where}: no file {p}") from None
+    except OSError as exc:
+        raise ConfigError(f"{where}: cannot read {p}: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(mode):
+        raise ConfigError(f"{where}: {p} is {file_kind(mode)}; expected a regular file")
+    return p
+
+
 def _check_size(where: str, path: Path, size: int) -> None:
     if size > MAX_INPUT_BYTES:
         raise ConfigError(f"{where}: {path} is larger than {MAX_INPUT_BYTES:,} bytes (the ceiling "
@@ -131,4 +148,5 @@ def check_nesting(data: Any, *, where: str, path: object) -> None:
             stack.extend((v, depth + 1) for v in items if isinstance(v, dict | list))
 
 
-__all__ = ["check_nesting", "file_kind", "read_bytes", "read_json", "read_text", "read_toml"]
+__all__ = ["check_nesting", "file_kind", "read_bytes", "read_json", "read_text", "read_toml",
+           "regular_file"]

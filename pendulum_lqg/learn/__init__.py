@@ -10,7 +10,8 @@ module            concept
 ================  ========================================================================
 ``methods``       every method, its options and extra
 ``train``         one run, every input checked first
-``runs``          a run's names, seeds, folder, stop and progress
+``runs``          a run's names, seeds, folder (and its lock), stop and progress
+``checkpoint``    the checkpoint ``--resume`` continues, checked before any work
 ``curve``         the learning curve
 ``deep``          the SB3 methods (the ``rl`` extra)
 ``ars``           augmented random search over a y/u history

@@ -27,7 +27,6 @@ counters: ``--resume`` continues the same seed stream and ends at the same contr
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -36,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.learn.methods import ARS_STEPS
 from pendulum_lqg.learn.runs import RunContext, Stopped, run_root, versions, write_json
 
 CHECKPOINT = "-checkpoint.json"
@@ -50,7 +50,7 @@ class ARSSettings:
     frames: int = 64
     directions: int = 16
     top: int = 8
-    steps: int = 300_000
+    steps: int = ARS_STEPS                  # what the committed runs used
 
 
 class RunningStats:
@@ -179,6 +179,7 @@ def settings_of(ctx: RunContext) -> ARSSettings:
 
 def load_start(path: Path, frames: int) -> dict[str, Any]:
     """The clone a run starts from: a history controller file of ``frames`` frames."""
+    from pendulum_lqg.boundary.fields import Where, integer, table
     from pendulum_lqg.boundary.schemas import linear_controller
 
     doc = linear_controller(path, where_text="--init")
@@ -188,17 +189,20 @@ def load_start(path: Path, frames: int) -> dict[str, Any]:
                           f"{doc['form']} form" + (f" of {doc['history']['frames']} frames"
                                                    if doc["form"] == "history" else ""))
     h = doc["history"]
-    n = int(doc.get("training", {}).get("samples", 2))
+    where = Where(f"--init: {path}", ("training",))
+    training = where.check(doc.get("training") or {}, table)
+    n = where.get(training, "samples", integer(0), default=2)
+    budget = where.get(training, "budget", table, default={})
+    where.at("budget").get(budget, "steps", integer(0), default=0)
     return {"weights": h["weights"], "bias": h["bias"], "mean": h["mean"], "std": h["std"],
-            "n": max(n, 2),
-            "path": str(path), "budget": doc.get("training", {}).get("budget", {})}
+            "n": max(n, 2), "path": str(path), "budget": budget}
 
 
 def train_ars(ctx: RunContext) -> list[Path]:
     """Train ARS run ``ctx.seed``; write its controller and curve (and checkpoints) to ``ctx.out``."""
     from pendulum_lqg.core.rules import limits
     from pendulum_lqg.envs.vector import CartPoleLQGVectorEnv
-    from pendulum_lqg.learn.curve import Curve, read_curve
+    from pendulum_lqg.learn.curve import Curve
 
     s = settings_of(ctx)
     start = None
@@ -206,17 +210,14 @@ def train_ars(ctx: RunContext) -> list[Path]:
         if not ctx.options.get("init"):
             raise ConfigError("--init: ars-history-clone starts from a clone: give --init FILE "
                               "(a controller written by pendulum-lqg train ls-clone)")
-        start = load_start(Path(ctx.options["init"]), s.frames)
+        start = ctx.options.get("start") or load_start(Path(ctx.options["init"]), s.frames)
     scale = float(limits(ctx.suite.plants()[1], ctx.suite.config.scenario)[2])
     state = ARSState(s, ctx.seed, start)
     points = None
     if ctx.resume:
-        saved = json.loads(ctx.path(CHECKPOINT).read_text(encoding="utf-8"))
-        if saved["settings"] != asdict(s) or saved["suite"] != ctx.suite.fingerprint():
-            raise ConfigError(f"--resume: {ctx.path(CHECKPOINT)} was written with other settings "
-                              f"or another suite ({saved['settings']}); resume with the same ones")
+        saved = ctx.resumed()       # checked at the boundary before any work
         state.load(saved["state"])
-        points = read_curve(ctx.path("-curve.csv"))[:saved["points"]]
+        points = saved["curve"]
     curve = Curve(ctx.suite, ctx.path("-curve.csv"), name=ctx.name, log=ctx.log, points=points)
     if not ctx.resume:                         # the start itself: what ARS adds is measured from it
         curve.add_linear(0, _document(ctx, s, state, curve, scale, start))

@@ -89,7 +89,8 @@ class ClosedLoopSettings:
     episodes : episodes per closed-loop round (of the suite's duration) in the default recipe.
         Thirty 10 s episodes per round: enough for a model whose one-step prediction error on
         held-out data is the true model's Kalman predictor's; the default recipe logs at most
-        70 000 steps (episodes that fail end early).
+        70 020 steps: whole bursts covering ``open_loop_steps`` (⌈10 000/30⌉ · 30 = 10 020), then
+        the rounds' episodes (episodes that fail end early).
     open_loop_steps : logged steps of open-loop bursts (at most a fifth of a given budget).
         Enough for a 4-number model that stabilises under the cautious filter.
     burst : periods of one open-loop burst. The pole falls from θ₀ in about half a second.
@@ -370,9 +371,94 @@ def _plan(steps: int | None, env: _Env, settings: ClosedLoopSettings) -> tuple[i
     return bursts, max(1, episodes)
 
 
+@dataclass
+class _Progress:
+    """The identification after its stage ``stage`` (0: the open-loop round, r: closed-loop round
+    r): what the next round needs, the rounds' results so far and the closed-loop episodes. The
+    rounds' seeds are the generator's state and the env's episode counter, so a run continued
+    from :meth:`checkpoint` plays the episodes an uninterrupted one plays."""
+
+    stage: int
+    bursts: int
+    per_round: int
+    open_logged: int
+    ss: dict[str, Any]
+    models: list[dict[str, Any]]
+    start: dict[str, Any]
+    results: list[tuple[int, int, dict[str, Any]]]
+    rng: np.random.Generator
+    closed: _Episodes | None = None
+
+    @classmethod
+    def open_loop(cls, env: _Env, bursts: int, per_round: int, settings: ClosedLoopSettings,
+                  say: Callable[[str], None]) -> _Progress:
+        data0 = _bursts(env, bursts, settings)
+        ss, first, start = _cautious_design(data0, env, settings)
+        say(f"open loop: {data0.logged:,} steps in {bursts} bursts, delay {first['delay']}, "
+            f"a = {first['A'][2][1]:.3g}, c = {first['A'][3][1]:.3g}, b = "
+            f"{np.round(np.asarray(first['B'])[2:, 0], 3).tolist()}")
+        return cls(0, bursts, per_round, data0.logged, ss, [first], start,
+                   [(data0.logged, env.stepped, ss)], np.random.default_rng([env.root, 3]))
+
+    @classmethod
+    def resumed(cls, state: dict[str, Any], data: dict[str, Any], env: _Env, bursts: int,
+                per_round: int, settings: ClosedLoopSettings) -> _Progress:
+        """The progress :meth:`checkpoint` gave, checked against this run's plan."""
+        if (state["bursts"], state["per_round"]) != (bursts, per_round) \
+                or not 0 <= state["stage"] <= settings.rounds:
+            raise ConfigError(f"resume: stage {state['stage']} of a plan of {state['bursts']} "
+                              f"bursts and {state['per_round']} episodes per round; this one is "
+                              f"{bursts} and {per_round} of {settings.rounds} rounds")
+        env.next_episode, env.stepped = int(state["next_episode"]), int(state["stepped"])
+        rng = np.random.default_rng([env.root, 3])
+        rng.bit_generator.state = state["rng"]
+        start = {k: (int(v) if k == "delay" else np.asarray(v, dtype=float))
+                 for k, v in state["start"].items()}
+        closed = _Episodes(np.asarray(data["Y"], dtype=float), np.asarray(data["U"], dtype=float),
+                           np.asarray(data["valid"], dtype=bool)) if state["stage"] else None
+        return cls(int(state["stage"]), bursts, per_round, int(state["open_logged"]),
+                   state["state_space"], list(state["models"]), start,
+                   [(int(a), int(b), c) for a, b, c in state["results"]], rng, closed)
+
+    def closed_round(self, r: int, env: _Env, settings: ClosedLoopSettings,
+                     say: Callable[[str], None]) -> None:
+        """Closed-loop round ``r``: episodes under the current design, the fit on every
+        closed-loop episode so far, the new design."""
+        new = _closed_loop(env, self.ss, self.per_round, settings.dither, self.rng)
+        closed = self.closed = new if self.closed is None else self.closed + new
+        model, costs = _closed_loop_model(closed, env, self.start, settings)
+        self.ss = certainty_equivalent(model.Phi, model.Gamma, model.A, model.B, model.L,
+                                       delay=model.delay, Q=env.Q, R=env.R, dt=env.dt)
+        self.models.append({**model.to_dict(), "delay_costs": costs,
+                            "fit": f"prediction error, innovations form, closed-loop rounds 1..{r}"})
+        self.start = {"params": model.params, "K_p": model.K_p, "x0": model.x0,
+                      "delay": model.delay, "weights": 1.0 / np.sqrt(np.diag(model.S))}
+        self.results.append((self.open_logged + closed.logged, env.stepped, self.ss))
+        self.stage = r
+        say(f"round {r}: {new.logged:,} new steps ({closed.logged:,} closed-loop), delay "
+            f"{model.delay}, innovation rms {np.sqrt(np.diag(model.S)).round(4).tolist()}, "
+            f"{model.iterations} steps of the fit")
+
+    def checkpoint(self, env: _Env) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+        """``(state, data)``: a JSON-able table and the closed-loop episodes so far."""
+        kept = self.closed if self.closed is not None else _Episodes(
+            np.zeros((0, env.periods, 2)), np.zeros((0, env.periods, 1)),
+            np.zeros((0, env.periods), dtype=bool))
+        state = _json({"stage": self.stage, "bursts": self.bursts, "per_round": self.per_round,
+                       "open_logged": self.open_logged, "next_episode": env.next_episode,
+                       "stepped": env.stepped, "state_space": self.ss, "models": self.models,
+                       "start": self.start, "results": [list(x) for x in self.results],
+                       "rng": self.rng.bit_generator.state})
+        return state, {"Y": kept.Y, "U": kept.U, "valid": kept.valid}
+
+
 def identify_closed_loop(suite: Any, *, root: int, steps: int | None = None,
                          settings: ClosedLoopSettings = ClosedLoopSettings(),
-                         log: Callable[[str], None] | None = None) -> list[RoundResult]:
+                         log: Callable[[str], None] | None = None,
+                         on_stage: Callable[[dict[str, Any], dict[str, np.ndarray]], None]
+                         | None = None,
+                         resume: tuple[dict[str, Any], dict[str, np.ndarray]] | None = None,
+                         ) -> list[RoundResult]:
     """Learn an LQG controller of ``suite`` from data (module docstring): the open-loop round,
     then ``settings.rounds`` closed-loop rounds; the last result is the final controller.
 
@@ -384,6 +470,12 @@ def identify_closed_loop(suite: Any, *, root: int, steps: int | None = None,
     steps : the budget of logged env steps (None: the default recipe, at most
         ``open_loop_steps + rounds·episodes·duration/T`` steps)
     log : called with one line per stage (progress)
+    on_stage : called after the open-loop round (stage 0) and after each closed-loop round
+        (stage r) with ``(state, data)``: what :func:`identify_closed_loop` needs to continue from
+        there (a JSON-able table) and the closed-loop episodes so far (``Y``, ``U``, ``valid``);
+        a checkpoint (``sysid-lqg``'s, :mod:`pendulum_lqg.learn.sysid_lqg`). It may raise to stop.
+    resume : such a ``(state, data)``: the identification continues after its stage, with the
+        same seeds, and gives the rounds an uninterrupted one gives
     """
     say = log or (lambda line: None)
     env = _Env(suite, root)
@@ -391,28 +483,18 @@ def identify_closed_loop(suite: Any, *, root: int, steps: int | None = None,
         raise ConfigError(f"suite {suite.name!r} gives the true state; the identification learns "
                           "from y = [p, θ]")
     bursts, per_round = _plan(steps, env, settings)
-    data0 = _bursts(env, bursts, settings)
-    ss, first, start = _cautious_design(data0, env, settings)
-    models = [first]
-    say(f"open loop: {data0.logged:,} steps in {bursts} bursts, delay {first['delay']}, "
-        f"a = {first['A'][2][1]:.3g}, c = {first['A'][3][1]:.3g}, b = "
-        f"{np.round(np.asarray(first['B'])[2:, 0], 3).tolist()}")
-    results = [(data0.logged, env.stepped, ss)]
-    rng, closed = np.random.default_rng([root, 3]), None
-    for r in range(1, settings.rounds + 1):
-        new = _closed_loop(env, ss, per_round, settings.dither, rng)
-        closed = new if closed is None else closed + new
-        model, costs = _closed_loop_model(closed, env, start, settings)
-        ss = certainty_equivalent(model.Phi, model.Gamma, model.A, model.B, model.L,
-                                  delay=model.delay, Q=env.Q, R=env.R, dt=env.dt)
-        models.append({**model.to_dict(), "delay_costs": costs,
-                       "fit": "prediction error, innovations form, closed-loop rounds 1.." + str(r)})
-        start = {"params": model.params, "K_p": model.K_p, "x0": model.x0, "delay": model.delay,
-                 "weights": 1.0 / np.sqrt(np.diag(model.S))}
-        results.append((data0.logged + closed.logged, env.stepped, ss))
-        say(f"round {r}: {new.logged:,} new steps ({closed.logged:,} closed-loop), delay "
-            f"{model.delay}, innovation rms {np.sqrt(np.diag(model.S)).round(4).tolist()}, "
-            f"{model.iterations} steps of the fit")
+    if resume is None:
+        run = _Progress.open_loop(env, bursts, per_round, settings, say)
+        if on_stage is not None:
+            on_stage(*run.checkpoint(env))
+    else:
+        run = _Progress.resumed(*resume, env, bursts, per_round, settings)
+        say(f"resumed after {'round ' + str(run.stage) if run.stage else 'the open loop'}")
+    for r in range(run.stage + 1, settings.rounds + 1):
+        run.closed_round(r, env, settings, say)
+        if on_stage is not None:
+            on_stage(*run.checkpoint(env))
+    ss, models, results = run.ss, run.models, run.results
     held_out = _closed_loop(env, ss, settings.validation_episodes, settings.dither,
                             np.random.default_rng([root, 4]))
     checks = _validation(models, held_out, env)

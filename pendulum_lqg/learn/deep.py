@@ -238,44 +238,62 @@ def train_sb3(ctx: RunContext, m: Method) -> list[Path]:
 def _start(ctx: RunContext, m: Method) -> tuple[Any, Any, list[dict[str, Any]] | None]:
     """A new model, or the checkpoint's with its env reseeded at its step count (``--resume``)."""
     import importlib
-    import json
 
     from stable_baselines3.common.vec_env import VecNormalize
 
     from pendulum_lqg.boundary.schemas import ALGORITHMS
     from pendulum_lqg.errors import ConfigError
-    from pendulum_lqg.learn.curve import read_curve
 
     if not ctx.resume:
         model, venv = build(m, ctx.seed, ctx.suite, tensorboard=ctx.out / "tensorboard")
+        _log_into(model, ctx.out)
         return model, venv, None
-    saved = json.loads(ctx.path(CHECKPOINT).read_text(encoding="utf-8"))
-    if saved["suite"] != ctx.suite.fingerprint() or saved["algo"] != m.algo:
-        raise ConfigError(f"--resume: {ctx.path(CHECKPOINT)} was written for another suite or "
-                          "algorithm; resume with the same method and --suite")
-    venv = VecNormalize.load(str(ctx.path("-checkpoint-vecnormalize.pkl")), _design_env(m, ctx.suite))
+    saved = ctx.resumed()           # checked at the boundary before any work
     cls = getattr(importlib.import_module(ALGORITHMS[m.algo]), m.algo)
-    model = cls.load(str(ctx.path("-checkpoint.zip")), env=venv, device="cpu",
-                     tensorboard_log=_tensorboard_folder(ctx.out / "tensorboard"))
-    if ctx.path("-checkpoint-replay.pkl").is_file():
-        model.load_replay_buffer(str(ctx.path("-checkpoint-replay.pkl")))
+    path = ctx.path("-checkpoint-vecnormalize.pkl")
+    try:
+        venv = VecNormalize.load(str(path), _design_env(m, ctx.suite))
+        path = ctx.path("-checkpoint.zip")
+        model = cls.load(str(path), env=venv, device="cpu",
+                         tensorboard_log=_tensorboard_folder(ctx.out / "tensorboard"))
+        path = ctx.path("-checkpoint-replay.pkl")
+        if path.is_file():
+            model.load_replay_buffer(str(path))
+    except Exception as exc:        # a damaged zip or pickle raises whatever its reader meets
+        raise ConfigError(f"--resume: {path}: not a checkpoint of {m.algo} that stable-baselines3 "
+                          f"can load ({type(exc).__name__}: {' '.join(str(exc).split())[:120]})"
+                          ) from None
+    if int(model.num_timesteps) != saved["steps"]:
+        raise ConfigError(f"--resume: {ctx.path('-checkpoint.zip')}: holds a model of "
+                          f"{int(model.num_timesteps):,} steps, {ctx.path(CHECKPOINT).name}: steps "
+                          f"says {saved['steps']:,}; start the run again with --force")
+    _log_into(model, ctx.out)
     # loaded with an env, the model resets it on its next learn(): these seeds
     venv.seed(TRAIN_SEED_BASE + 1000 * ctx.seed + int(model.num_timesteps))
-    return model, venv, read_curve(ctx.path("-curve.csv"))[:saved["points"]]
+    return model, venv, saved["curve"]
+
+
+def _log_into(model: Any, folder: Path) -> None:
+    """SB3's logger writes into the run folder (TensorBoard's files, where it is installed), never
+    into an ``SB3-<time>`` folder of the system's temporary folder (SB3's default without one)."""
+    if model.tensorboard_log is None:
+        from stable_baselines3.common.logger import configure
+
+        model.set_logger(configure(str(folder), []))
 
 
 def _checkpoint(ctx: RunContext, model: Any, venv: Any, curve: Any) -> None:
     """Model (with its optimiser), ``VecNormalize``'s statistics, SAC's replay buffer, then the
     JSON that names them (written last: a checkpoint exists only once it is whole)."""
-    import os
+    from pendulum_lqg.util.files import replacing
 
     for suffix, save in ((".zip", model.save), ("-vecnormalize.pkl", venv.save)) + (
             (("-replay.pkl", model.save_replay_buffer),) if hasattr(model, "replay_buffer")
             else ()):
-        final = ctx.path(f"-checkpoint{suffix}")
-        tmp = final.with_name(f".{final.name}.{os.getpid()}.tmp{suffix}")
-        save(str(tmp))
-        os.replace(tmp, final)
+        # whole or not at all, and on any error (a full disk, a file-size limit) no temporary
+        # file left behind
+        with replacing(ctx.path(f"-checkpoint{suffix}"), where="--out", what="checkpoint") as tmp:
+            save(str(tmp))
     write_json(ctx.path(CHECKPOINT), {"algo": type(model).__name__, "steps": int(model.num_timesteps),
                                       "points": len(curve.points), "suite": ctx.suite.fingerprint(),
                                       "wall_seconds": curve.wall_seconds()})
@@ -283,14 +301,12 @@ def _checkpoint(ctx: RunContext, model: Any, venv: Any, curve: Any) -> None:
 
 def _finish(ctx: RunContext, m: Method, model: Any, venv: Any, curve: Any, steps: int) -> None:
     """The model (temp + rename), its record, and the checkpoints removed."""
-    import os
-
     from pendulum_lqg.envs.registration import ENV_ID
     from pendulum_lqg.scoreboard.sb3 import rl_versions
+    from pendulum_lqg.util.files import replacing
 
-    tmp = ctx.path(".zip").with_name(f".{ctx.name}.{os.getpid()}.tmp.zip")
-    model.save(str(tmp))
-    os.replace(tmp, ctx.path(".zip"))
+    with replacing(ctx.path(".zip"), where="--out", what="model") as tmp:
+        model.save(str(tmp))
     done = int(model.num_timesteps)              # PPO rolls out whole n_steps × envs: may exceed
     record = {"method": ctx.method, "seed": ctx.seed, "algo": m.algo, "suite": ctx.suite.name,
               **m.design().record(), "normalize_action": True, "obs_norm": obs_norm_of(venv),

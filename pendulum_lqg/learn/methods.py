@@ -9,6 +9,13 @@ from pendulum_lqg.learn.deep import METHODS as SB3_METHODS
 
 #: The install line of the ``rl`` extra, said by every SB3 method that misses it.
 RL_EXTRA = "uv sync --extra rl, or pip install 'pendulum-lqg[rl]'"
+#: ARS's default budget (``ARSSettings.steps``): what the committed runs of
+#: ``experiments/agents/models`` used and docs/leaderboard.md gives.
+ARS_STEPS = 200_000
+#: The most env steps ``sysid-lqg``'s default recipe logs (``ClosedLoopSettings``): whole bursts
+#: of 30 periods covering 10 000 open-loop steps (334 · 30 = 10 020), then two rounds of 30
+#: episodes of at most 1 000 periods; episodes that fail end early, so a run logs at most this.
+SYSID_LQG_STEPS = 70_020
 
 
 @dataclass(frozen=True)
@@ -29,16 +36,17 @@ class MethodInfo:
 
 _LINEAR = {
     "ars-history": MethodInfo("ars-history", "ARS V2-t from zero: a linear policy of the last 64 "
-                              "(y, u) rows, observation normalisation", "lecture", 300_000, "ars",
+                              "(y, u) rows, observation normalisation", "lecture", ARS_STEPS, "ars",
                               ("frames", "alpha", "nu", "eval_every")),
     "ars-history-clone": MethodInfo("ars-history-clone", "ARS V2-t started from a least-squares "
-                                    "clone (--init FILE, from ls-clone)", "lecture", 300_000, "ars",
+                                    "clone (--init FILE, from ls-clone)", "lecture", ARS_STEPS, "ars",
                                     ("frames", "alpha", "nu", "eval_every", "init")),
     "ls-clone": MethodInfo("ls-clone", "least-squares clone (history of 64) of the identified "
                            "LQG's actions on closed-loop data", "lecture", 20_000, "clone",
                            ("frames",)),
     "sysid-lqg": MethodInfo("sysid-lqg", "closed-loop identification, then certainty-equivalent "
-                            "LQG (one curve point per round)", "lecture", 0, "sysid-lqg"),
+                            "LQG (one curve point per round)", "lecture", SYSID_LQG_STEPS,
+                            "sysid-lqg"),
     "sysid-openloop": MethodInfo("sysid-openloop", "least squares from open-loop bursts, then LQG "
                                  "(the earlier sysid-lqg, kept as evidence)", "lecture", 1_000_000,
                                  "sysid-openloop"),
@@ -54,7 +62,7 @@ def list_lines() -> list[str]:
     """One line per method: name, default suite, default env steps, the extra, what it is."""
     out = []
     for name, m in METHODS.items():
-        steps = "its rounds" if m.kind == "sysid-lqg" else f"{m.steps:,} steps"
+        steps = f"{'≤ ' if m.kind == 'sysid-lqg' else ''}{m.steps:,} steps"
         extra = f"[{m.extra}]" if m.extra else "-"
         out.append(f"{name:22s} {m.suite:11s} {steps:>15s}  {extra:5s} {m.what}")
     return out

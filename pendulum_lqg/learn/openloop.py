@@ -18,7 +18,6 @@ covariances come out right; ``sysid-lqg`` (closed-loop identification) is the me
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -89,17 +88,14 @@ def budgets_for(steps: int | None) -> tuple[int, ...]:
 def train_openloop(ctx: RunContext) -> list[Path]:
     """Identify from open-loop bursts at each budget; write the largest budget's controller."""
     from pendulum_lqg.errors import ConfigError, PendulumLQGError
-    from pendulum_lqg.learn.curve import Curve, read_curve
+    from pendulum_lqg.learn.curve import Curve
 
     budgets, suite = budgets_for(ctx.steps), ctx.suite
     u_exc = 0.5 * u_max_of(suite)
     done, points = 0, None
     if ctx.resume:
-        saved = json.loads(ctx.path(CHECKPOINT).read_text(encoding="utf-8"))
-        if saved["budgets"] != list(budgets) or saved["suite"] != suite.fingerprint():
-            raise ConfigError(f"--resume: {ctx.path(CHECKPOINT)} was written with other budgets "
-                              "or another suite; resume with the same --steps and --suite")
-        done, points = saved["done"], read_curve(ctx.path("-curve.csv"))[:saved["points"]]
+        saved = ctx.resumed()       # checked at the boundary before any work
+        done, points = saved["done"], saved["curve"]
     curve = Curve(suite, ctx.path("-curve.csv"), name=ctx.name, log=ctx.log, points=points)
     # episodes that fail early log fewer than H steps: a fifth more episodes than H·E covers
     Y, U, valid = sysid_data(ctx.seed, suite, -(-max(budgets) * 6 // (5 * HORIZON)), HORIZON,

@@ -16,6 +16,7 @@ episodes. Files are replaced only when the caller asked (``--force``), and then 
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import time
@@ -25,6 +26,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from pendulum_lqg.boundary.schemas import CURVE_COLUMNS as SCHEMA_CURVE_COLUMNS
 from pendulum_lqg.errors import ConfigError
 
 #: Root seed of the learning curve's 20 evaluation episodes (not a suite's seed).
@@ -34,9 +36,9 @@ TRAIN_SEED_BASE = 500_000
 #: Where runs go when no ``--out`` is given: never the committed models or the docs.
 RUNS_FOLDER = Path("runs")
 #: The curve's columns: the evaluation (deterministic policy, 20 fixed episodes) then the mean
-#: return and length of the training episodes that ended since the previous point.
-CURVE_COLUMNS = ("env_steps", "wall_seconds", "success_rate", "score_mean", "score_ci_lo",
-                 "score_ci_hi", "train_return", "train_length")
+#: return and length of the training episodes that ended since the previous point (the schema:
+#: :func:`pendulum_lqg.boundary.schemas.curve_file`).
+CURVE_COLUMNS = SCHEMA_CURVE_COLUMNS
 
 
 def run_root(seed: int) -> int:
@@ -122,6 +124,19 @@ class RunContext:
     options: dict[str, Any] = field(default_factory=dict)
     log: Callable[[str], None] = lambda line: print(line, file=sys.stderr, flush=True)
     stop: StopFlag = field(default_factory=StopFlag)
+    #: the run folder's lock (:class:`RunFolder`), held from :func:`~pendulum_lqg.learn.train.prepare`
+    #: until the run ends
+    folder: RunFolder | None = None
+    #: ``--resume``: the checkpoint, read and checked at the boundary before any work
+    checkpoint: dict[str, Any] | None = None
+
+    def resumed(self) -> dict[str, Any]:
+        """The checkpoint ``--resume`` continues, as :mod:`pendulum_lqg.learn.checkpoint` read it
+        (:func:`pendulum_lqg.learn.train.run` reads it before any training)."""
+        if self.checkpoint is None:
+            raise ConfigError("--resume: the checkpoint is read by pendulum_lqg.learn.train.run; "
+                              "train the run through it")
+        return self.checkpoint
 
     @property
     def name(self) -> str:
@@ -132,30 +147,113 @@ class RunContext:
         return self.out / f"{self.name}{suffix}"
 
 
+class RunFolder:
+    """The run folder held by one run: the lock on its run files (``DIR/.METHOD-seedS.lock``, a
+    :class:`~pendulum_lqg.util.files.FileLock`, ``bench``'s lock), taken before any training and
+    held until the run ends however it ends, so two runs of one method and seed never write into
+    one folder: a second start, a ``--force`` or a second ``--resume`` is refused in one line,
+    ``--out: DIR (NAME) is being written by another run (pid N)``. Taking it is also the proof that
+    the folder can be written: a folder that cannot be is refused before any work."""
+
+    def __init__(self, out: Path, name: str) -> None:
+        from pendulum_lqg.util.files import FileLock
+
+        self.out, self.name = out, name
+        self.made: list[Path] = []                 # the folders this run created, deepest first
+        self.lock = FileLock(out / f".{name}.lock", where=f"--out: {out} ({name})")
+
+    def open(self) -> None:
+        """Create the folder (with its parents) and take the lock; one line if either fails."""
+        missing = [p for p in (self.out, *self.out.parents) if not p.exists()]
+        try:
+            self.out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ConfigError(f"--out: cannot create the folder {self.out}: "
+                              f"{exc.strerror or exc}") from None
+        self.made = missing
+        try:
+            self.lock.acquire()
+        except OSError as exc:
+            self.abandon()
+            raise ConfigError(f"--out: cannot write into {self.out} ({exc.strerror or exc}); "
+                              "give --out a folder this user can write") from None
+        except ConfigError:
+            self.abandon()
+            raise
+
+    def release(self) -> None:
+        self.lock.release()
+
+    def abandon(self) -> None:
+        """Release the lock and remove the folders this run created if they are still empty (a
+        run refused after its folder was made leaves nothing behind)."""
+        self.lock.release()
+        for folder in self.made:
+            try:
+                folder.rmdir()
+            except OSError:
+                break
+        self.made = []
+
+
+def out_folder(out: str | os.PathLike[str]) -> Path:
+    """``--out`` as given, checked before it becomes a :class:`~pathlib.Path` (``Path("")`` is
+    the current folder): an empty or blank text is refused, never a run written into the current
+    folder or into a folder named by blanks."""
+    text = os.fspath(out)
+    if not text.strip():
+        raise ConfigError(f"--out: expected a folder for the run, got {text!r}")
+    return Path(text)
+
+
 def check_out_folder(out: Path, name: str, *, force: bool, resume: bool,
-                     checkpoint: str) -> None:
-    """The run folder ``out`` checked before any training: a folder (or a new path), its run files
-    regular files or absent; existing run files only with ``--force`` or ``--resume``, and
-    ``--resume`` only where a checkpoint ``out/NAME<checkpoint>`` exists."""
+                     checkpoint: str) -> RunFolder:
+    """The run folder ``out`` checked before any training, and held: a folder (or a new path), its
+    run files regular files or absent; existing run files only with ``--force`` or ``--resume``,
+    and ``--resume`` only where a checkpoint ``out/NAME<checkpoint>`` exists. The folder is made
+    and locked (:class:`RunFolder`) before the files are looked at, so what is checked is what the
+    run finds; the caller releases it (:func:`pendulum_lqg.learn.train.run` does)."""
     from pendulum_lqg.util.files import file_kind, regular_target
 
     if out.exists() and not out.is_dir():
-        import os
-
         raise ConfigError(f"--out: {out} is {file_kind(os.stat(out).st_mode)}; expected a folder "
                           "or a new path for the run (it is left as it is)")
-    files = [out / f"{name}{s}" for s in (".json", ".zip", "-curve.csv", checkpoint)]
+    files = run_files(out, name, checkpoint)
     for path in files:
         regular_target("--out", path)
-    if resume:
-        if not (out / f"{name}{checkpoint}").is_file():
-            raise ConfigError(f"--resume: {out} holds no checkpoint of {name} "
-                              f"({name}{checkpoint}); start the run without --resume")
-        return
-    existing = [p.name for p in files if p.exists()]
-    if existing and not force:
-        raise ConfigError(f"--out: {out} already holds {', '.join(existing)}; give --force to "
-                          "replace the run, --resume to continue it, or another --out")
+    folder = RunFolder(out, name)
+    folder.open()
+    try:
+        if resume:
+            if not (out / f"{name}{checkpoint}").is_file():
+                raise ConfigError(f"--resume: {out} holds no checkpoint of {name} "
+                                  f"({name}{checkpoint}); start the run without --resume")
+            return folder
+        existing = [p.name for p in files if p.is_symlink() or p.exists()]
+        if existing and not force:
+            raise ConfigError(f"--out: {out} already holds {', '.join(existing)}; give --force to "
+                              "replace the run, --resume to continue it, or another --out")
+    except BaseException:
+        folder.abandon()
+        raise
+    return folder
+
+
+def run_files(out: Path, name: str, checkpoint: str = "-checkpoint.json") -> list[Path]:
+    """The files of run ``name`` in ``out``: controller or record, model, curve, checkpoint."""
+    return [out / f"{name}{s}" for s in (".json", ".zip", "-curve.csv", checkpoint)]
+
+
+def clear_run(out: Path, name: str) -> None:
+    """Remove run ``name``'s files from ``out`` (a run started again with ``--force``), its
+    checkpoints too, so that nothing of the old run is mixed into the new one and a later
+    ``--resume`` can only continue the new one. A symbolic link is removed, never its target
+    (:func:`pendulum_lqg.util.files.remove_entry`, ``bench --force``'s rule)."""
+    from pendulum_lqg.util.files import remove_entry
+
+    for path in [*run_files(out, name), *sorted(out.glob(f"{name}-checkpoint*"))]:
+        if path.is_symlink() or path.is_file():
+            remove_entry(path)
 
 
 def write_text(path: Path, text: str) -> None:

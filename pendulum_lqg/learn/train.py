@@ -16,10 +16,23 @@ from typing import Any
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.learn.methods import METHODS, RL_EXTRA, MethodInfo
-from pendulum_lqg.learn.runs import RunContext, check_out_folder, default_out
+from pendulum_lqg.learn.runs import (
+    RunContext,
+    check_out_folder,
+    clear_run,
+    default_out,
+    out_folder,
+)
 
 #: Ceilings checked before training: env steps of one run and the history length (3K inputs).
 MAX_STEPS, MAX_FRAMES = 10**10, 1024
+#: ``--steps`` ceilings of the methods whose memory grows with the budget (the others keep a
+#: fixed memory: SB3's rollouts and replay buffer, ARS's policy and statistics): the
+#: identifications hold every logged sample for their fits (about 15 and 10 times their defaults).
+METHOD_MAX_STEPS = {"sysid-lqg": 1_000_000, "sysid-openloop": 10_000_000}
+#: ``ls-clone`` holds ``--steps`` histories of ``3·K`` values for its fit: at most this many values
+#: (320 MB; 208,333 samples at the default K = 64).
+CLONE_MAX_VALUES = 40_000_000
 CHECKPOINT = "-checkpoint.json"
 
 
@@ -42,7 +55,48 @@ def _real(flag: str, value: Any, *, positive: bool) -> float:
     if not math.isfinite(number) or number < 0 or (positive and number == 0):
         raise ConfigError(f"{flag}: expected a finite number {'> 0' if positive else '≥ 0'}, "
                           f"got {value!r}")
+    return number + 0.0                         # -0.0 is 0: one value, one run name
+
+
+def max_steps(info: MethodInfo, frames: int | None = None) -> int:
+    """The largest ``--steps`` of ``info`` (:data:`METHOD_MAX_STEPS`, :data:`CLONE_MAX_VALUES`)."""
+    if info.kind == "clone":
+        from pendulum_lqg.learn.clone import FRAMES
+
+        return CLONE_MAX_VALUES // (3 * (frames or FRAMES))
+    return METHOD_MAX_STEPS.get(info.kind, MAX_STEPS)
+
+
+def check_steps(info: MethodInfo, steps: Any, frames: int | None) -> int | None:
+    """``--steps`` within the method's documented ceiling (:func:`max_steps`), before any work."""
+    if steps is None:
+        return None
+    number = _integer("--steps", steps, 1, MAX_STEPS)
+    ceiling = max_steps(info, frames)
+    if number > ceiling:
+        why = (f"the fit holds --steps × 3·K history values, at most {CLONE_MAX_VALUES:,}; K = "
+               f"{frames or 64}" if info.kind == "clone" else
+               "the identification holds every logged sample for its fits")
+        raise ConfigError(f"--steps: expected at most {ceiling:,} for {info.name} ({why}), got "
+                          f"{number:,}")
     return number
+
+
+def _training_suite(name: str, noise_scale: float | None) -> Any:
+    """The suite ``name`` with ``--noise-scale`` applied; a scale the env refuses is blamed on the
+    flag, not on the suite's ``[env]``."""
+    from pendulum_lqg.errors import PendulumLQGError
+    from pendulum_lqg.scoreboard.suites import load_suite
+
+    loaded = load_suite(name)
+    try:
+        return loaded.with_noise_scale(noise_scale)
+    except PendulumLQGError as exc:
+        if noise_scale is None:
+            raise
+        said = str(exc)
+        said = said.split("noise_scale: ", 1)[1] if "noise_scale: " in said else said
+        raise ConfigError(f"--noise-scale: {said}") from None
 
 
 def check_options(info: MethodInfo, options: dict[str, Any]) -> dict[str, Any]:
@@ -99,41 +153,70 @@ def prepare(method: str, *, seed: Any, suite: str | None = None, steps: Any = No
             log: Callable[[str], None] | None = None) -> RunContext:
     """The run's context, every input checked (nothing trained, nothing written)."""
     from pendulum_lqg.learn.deep import method_name
-    from pendulum_lqg.scoreboard.suites import load_suite
 
     info = METHODS.get(method)
     if info is None:
         raise ConfigError(f"method: expected one of {', '.join(METHODS)}, got {method!r} "
                           "(pendulum-lqg train --list)")
     seed = _integer("--seed", seed, 0, 10**6)
-    steps = None if steps is None else _integer("--steps", steps, 1, MAX_STEPS)
     opts = check_options(info, options or {})
+    steps = check_steps(info, steps, opts.get("frames"))
     if force and resume:
         raise ConfigError("--resume: give either --force (start again) or --resume, not both")
     if resume and out is None:
         raise ConfigError("--resume: needs the --out DIR of the run to continue")
+    folder = out_folder(out) if out is not None else None
     check_extra(info)
-    loaded = load_suite(suite or info.suite).with_noise_scale(opts.get("noise_scale"))
+    loaded = _training_suite(suite or info.suite, opts.get("noise_scale"))
+    if "init" in opts:                     # the clone ARS starts from, read at the boundary now
+        from pendulum_lqg.learn.ars import ARSSettings, load_start
+
+        opts["start"] = load_start(opts["init"], opts.get("frames") or ARSSettings().frames)
     name = method_name(method, opts.get("noise_scale"))
-    folder = Path(out) if out is not None else default_out(name, seed)
-    check_out_folder(folder, f"{name}-seed{seed}", force=force, resume=resume,
-                     checkpoint=CHECKPOINT)
-    ctx = RunContext(method=name, seed=seed, suite=loaded, out=folder, steps=steps,
-                     eval_every=opts.get("eval_every", 50_000), resume=resume, options=opts)
-    ctx.options["kind"], ctx.options["base"] = info.kind, method
-    if log is not None:
-        ctx.log = log
+    folder = folder or default_out(name, seed)
+    held = check_out_folder(folder, f"{name}-seed{seed}", force=force, resume=resume,
+                            checkpoint=CHECKPOINT)
+    try:
+        ctx = RunContext(method=name, seed=seed, suite=loaded, out=folder, steps=steps,
+                         eval_every=opts.get("eval_every", 50_000), resume=resume, options=opts,
+                         folder=held)
+        ctx.options["kind"], ctx.options["base"] = info.kind, method
+        if log is not None:
+            ctx.log = log
+        if resume:
+            from pendulum_lqg.learn.checkpoint import read_checkpoint
+
+            ctx.checkpoint = read_checkpoint(ctx)
+    except BaseException:
+        held.abandon()
+        raise
     return ctx
 
 
 def run(ctx: RunContext) -> list[Path]:
-    """Train the prepared run (:func:`prepare`). A run started again (``--force``) first drops
-    the checkpoints of the run it replaces, so that a later ``--resume`` can only continue it."""
-    ctx.out.mkdir(parents=True, exist_ok=True)
-    if not ctx.resume:
-        for old in ctx.out.glob(f"{ctx.name}-checkpoint*"):
-            if old.is_file():
-                old.unlink()
+    """Train the prepared run (:func:`prepare`), holding its folder's lock until it ends. A run
+    started again (``--force``) first removes the files of the run it replaces, checkpoints too
+    (:func:`~pendulum_lqg.learn.runs.clear_run`: a symbolic link is removed, never its target),
+    so that nothing of the old run is mixed into the new one and a later ``--resume`` can only
+    continue it."""
+    if ctx.folder is None:                      # a context made by hand: hold the folder now
+        from pendulum_lqg.learn.runs import RunFolder
+
+        ctx.folder = RunFolder(ctx.out, ctx.name)
+        ctx.folder.open()
+    try:
+        if ctx.resume and ctx.checkpoint is None:
+            from pendulum_lqg.learn.checkpoint import read_checkpoint
+
+            ctx.checkpoint = read_checkpoint(ctx)
+        if not ctx.resume:
+            clear_run(ctx.out, ctx.name)
+        return _train(ctx)
+    finally:
+        ctx.folder.release()
+
+
+def _train(ctx: RunContext) -> list[Path]:
     kind = ctx.options["kind"]
     if kind == "sb3":
         from pendulum_lqg.learn.deep import METHODS as SB3

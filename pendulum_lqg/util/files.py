@@ -107,6 +107,25 @@ def regular_target(where: str, path: Path, *, what: str = "file") -> Path:
     return target
 
 
+def remove_entry(path: str | os.PathLike[str]) -> None:
+    """Remove the name ``path`` from its folder: a symbolic link itself (never what it points to,
+    a file or a folder outside), a file, or a folder tree (its own entries only: links inside it
+    are removed as links). Absent: nothing. The one rule of ``--force`` for a folder of outputs
+    (``bench``'s results folder, ``train``'s run files): a run replaces what it wrote, never
+    the target of a link a user put there."""
+    p = Path(path)
+    try:
+        mode = os.lstat(p).st_mode
+    except FileNotFoundError:
+        return
+    if stat.S_ISDIR(mode):
+        import shutil
+
+        shutil.rmtree(p)
+    else:
+        p.unlink(missing_ok=True)
+
+
 @contextlib.contextmanager
 def replacing(path: str | os.PathLike[str], *, where: str = "out",
               what: str = "file") -> Iterator[Path]:

@@ -29,12 +29,34 @@ def true_lqg_state_space(suite: Any) -> dict[str, Any]:
 
 
 def closed_loop_module(calls: list[dict[str, Any]]) -> types.ModuleType:
-    """The stand-in module; each call's arguments are appended to ``calls``."""
+    """The stand-in module; each call's arguments are appended to ``calls``. Like the real one it
+    calls ``on_stage(state, data)`` after its open-loop stage and each of its two rounds (a state
+    of the real one's keys: what ``sysid-lqg``'s checkpoint holds) and continues after ``resume``'s
+    stage."""
+    import numpy as np
+
     def identify_closed_loop(suite: Any, *, root: int, steps: int | None = None,
-                             log: Any = None) -> list[RoundResult]:
-        calls.append({"suite": suite.name, "root": root, "steps": steps})
+                             log: Any = None, on_stage: Any = None,
+                             resume: Any = None) -> list[RoundResult]:
+        done = 0 if resume is None else int(resume[0]["stage"])
+        calls.append({"suite": suite.name, "root": root, "steps": steps,
+                      **({"resumed_after": done} if resume is not None else {})})
         ss = true_lqg_state_space(suite)
         log("stand-in identification: 2 rounds")
+        logged = [(1_000, 1_000), (10_000, 10_400), (40_000, 41_000)]
+        for stage in range(done + (resume is not None), 3):
+            if on_stage is None:
+                continue
+            rng = np.random.default_rng([root, 3])
+            on_stage({"stage": stage, "bursts": 10, "per_round": 1, "open_logged": 1_000,
+                      "next_episode": 10 + stage, "stepped": logged[stage][1],
+                      "state_space": ss, "models": [{"round": r} for r in range(stage + 1)],
+                      "start": {"params": [0.0], "K_p": [[0.0]], "x0": [0.0], "delay": 1,
+                                "weights": [1.0]},
+                      "results": [[a, b, ss] for a, b in logged[:stage + 1]],
+                      "rng": rng.bit_generator.state},
+                     {"Y": np.zeros((stage, 3, 2)), "U": np.zeros((stage, 3, 1)),
+                      "valid": np.ones((stage, 3), dtype=bool)})
         return [RoundResult(10_000, 10_400, ss, {"round": 1}, {"innovation_rms": [0.1, 0.1]}),
                 RoundResult(40_000, 41_000, ss, {"round": 2}, {"innovation_rms": [0.1, 0.1]})]
 

@@ -70,13 +70,16 @@ def reduced():
     settings = ClosedLoopSettings(rounds=2, episodes=6, open_loop_steps=3000, max_delay=1,
                                   validation_episodes=2)
     lines: list[str] = []
-    return suite, identify_closed_loop(suite, root=7, settings=settings, log=lines.append), lines
+    stages: list[tuple[dict, dict]] = []
+    results = identify_closed_loop(suite, root=7, settings=settings, log=lines.append,
+                                   on_stage=lambda state, data: stages.append((state, data)))
+    return suite, results, lines, settings, stages
 
 
 def test_a_reduced_identification_stabilises_the_plant_and_survives(truth, reduced):
     from pendulum_lqg.scoreboard.linear import controller_file, linear_rows
 
-    suite, results, lines = reduced
+    suite, results, lines, _, _ = reduced
     assert len(results) == 3 and len(lines) == 4          # open loop, two rounds, validation
     final = results[-1]
     assert _loop_radius(truth, final.state_space) < 1
@@ -90,7 +93,7 @@ def test_a_reduced_identification_stabilises_the_plant_and_survives(truth, reduc
 
 
 def test_the_record_is_json_and_the_validation_sits_above_the_sensor_floor(reduced):
-    _, results, _ = reduced
+    _, results, *_ = reduced
     for r in results:
         json.dumps({"model": r.model, "validation": r.validation, "ss": r.state_space})
     check = results[-1].validation
@@ -100,6 +103,42 @@ def test_the_record_is_json_and_the_validation_sits_above_the_sensor_floor(reduc
     assert all(0.1 * 0.95 < r < 0.1 * 1.1 for r in check["innovation_rms"])
     assert check["samples"] == 800 and check["episodes"] == 2
     assert results[-1].model["delay"] in (0, 1) and len(results[-1].model["params"]) == 8
+
+
+def test_item12_identification_resumed_after_a_round_gives_the_uninterrupted_rounds(reduced):
+    """Issue 55 item 12: the state ``on_stage`` gives after closed-loop round 1, through JSON and
+    an .npz as ``sysid-lqg``'s checkpoint stores it, continues to the rounds (models, designs,
+    step counts, validation) of the run that was never stopped."""
+    import io
+
+    suite, results, _, settings, stages = reduced
+    assert [state["stage"] for state, _ in stages] == [0, 1, 2]
+    state, data = stages[1]
+    state = json.loads(json.dumps(state))
+    buffer = io.BytesIO()
+    np.savez(buffer, **data)
+    buffer.seek(0)
+    with np.load(buffer, allow_pickle=False) as npz:
+        data = {k: npz[k] for k in npz.files}
+    assert data["Y"].shape == (6, 400, 2)                     # round 1's episodes
+    lines: list[str] = []
+    resumed = identify_closed_loop(suite, root=7, settings=settings, log=lines.append,
+                                   resume=(state, data))
+    assert lines[0] == "resumed after round 1" and lines[1].startswith("round 2: ")
+    for a, b in zip(resumed, results, strict=True):
+        assert (a.logged_steps, a.stepped_steps) == (b.logged_steps, b.stepped_steps)
+        assert json.dumps(a.model, sort_keys=True) == json.dumps(b.model, sort_keys=True)
+        assert a.validation == b.validation
+        for key in "ABCD":
+            np.testing.assert_array_equal(a.state_space[key], b.state_space[key])
+
+
+def test_item12_identification_resume_of_another_plan_is_refused(reduced):
+    suite, _, _, settings, stages = reduced
+    state, data = stages[0]
+    with pytest.raises(ConfigError, match="resume: stage 0 of a plan of 100 bursts and 6 episodes"):
+        identify_closed_loop(suite, root=7, settings=settings, steps=20_000,
+                             resume=(state, data))
 
 
 @pytest.mark.parametrize(("field", "value"), [("dither", 0.0), ("rounds", 0), ("burst", 2),

@@ -238,7 +238,8 @@ def test_linear_file_written_by_train_scores_exactly_as_the_in_memory_controller
     assert scored["method"] == "sysid-lqg" and scored["seed"] == 4
 
 
-def test_sysid_lqg_is_not_resumed(tmp_path, capsys, identification):
-    (tmp_path / "sysid-lqg-seed0-checkpoint.json").write_text("{}")
-    status, err = run_cli(capsys, ["train", "sysid-lqg", "--out", str(tmp_path), "--resume"])
-    _one_line(status, err, "--resume: sysid-lqg is not resumed")
+def test_ls_clone_is_not_resumed(tmp_path, capsys, identification):
+    """ls-clone keeps no checkpoint (sysid-lqg does: test_train_reliability.py, item 12)."""
+    (tmp_path / "ls-clone-seed0-checkpoint.json").write_text("{}")
+    status, err = run_cli(capsys, ["train", "ls-clone", "--out", str(tmp_path), "--resume"])
+    _one_line(status, err, "--resume: ls-clone is not resumed")

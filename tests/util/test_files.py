@@ -154,3 +154,23 @@ def test_output_folder_refuses_what_is_not_a_folder(tmp_path, kind, says):
         output_folder("--out", target, what="scores")
     assert str(err.value).startswith(f"--out: {target} {says}; expected a folder for the scores")
     assert output_folder("--out", tmp_path / "new" / "deep", what="scores").is_dir()
+
+
+def test_item02_remove_entry_removes_a_link_never_its_target(tmp_path):
+    """Issue 55 item 2: ``--force``'s one rule (``bench``'s results folder, ``train``'s run
+    files): a link to a file or to a folder is removed as a link, and a folder's tree is removed
+    without following the links inside it."""
+    from pendulum_lqg.util.files import remove_entry
+
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    (outside / "model.json").write_text("committed")
+    out = tmp_path / "out"
+    (out / "units").mkdir(parents=True)
+    (out / "file-link.json").symlink_to(outside / "model.json")
+    (out / "folder-link").symlink_to(outside, target_is_directory=True)
+    (out / "units" / "inner-link").symlink_to(outside, target_is_directory=True)
+    for name in ("file-link.json", "folder-link", "units", "absent"):
+        remove_entry(out / name)
+    assert list(out.iterdir()) == []
+    assert (outside / "model.json").read_text() == "committed"
