@@ -112,7 +112,7 @@ def add_theory_parser(sub: Any) -> None:
                         "dlqr/lqr + none/kalman/kalman-predictor/luenberger (default "
                         "dlqr+none, dlqr+kalman, dlqr+luenberger)")
     p.add_argument("--agent", default=None, metavar="linear:FILE",
-                   help="a linear controller file (linear:FILE.json, e.g. "
+                   help="a linear controller file (default: none; linear:FILE.json, e.g. "
                         "linear:experiments/agents/models/sysid-lqg-seed0.json) instead of "
                         "POLICY: its exact stationary J on the suite's plant linearised, and the "
                         "exact gap J/J* − 1 to the suite's reference (--suite)")

@@ -138,6 +138,8 @@ def _exact_cell(exact: dict[str, Any] | None) -> str:
         return "–"
     if not exact["stable"]:
         return f"unstable (radius {exact['spectral_radius']:.4f})"
+    if exact["gap"] is None:         # J* = 0: a noise-free suite's stationary cost, no ratio
+        return "– (the reference's J is 0)"
     return f"{exact['gap']:+.4f}, {exact['episode_gap']:+.4f}"
 
 

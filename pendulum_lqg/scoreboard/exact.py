@@ -47,6 +47,13 @@ from pendulum_lqg.errors import ConfigError, PendulumLQGError
 __all__ = ["ExactCost", "compensator", "exact_builtin", "exact_linear", "exact_reference"]
 
 
+def _ratio_gap(J: float, J_opt: float, stable: bool) -> float:
+    """``J/J* − 1``: ``inf`` for an unstable loop, ``nan`` when ``J* = 0``."""
+    if not stable:
+        return math.inf
+    return J / J_opt - 1.0 if J_opt > 0 else math.nan
+
+
 @dataclass(frozen=True)
 class ExactCost:
     """The exact stationary figures of one controller on one suite (module docstring)."""
@@ -61,12 +68,13 @@ class ExactCost:
 
     @property
     def gap(self) -> float:
-        """``J/J* − 1`` (``inf`` when the loop is unstable)."""
-        return self.J / self.J_opt - 1.0 if self.stable else math.inf
+        """``J/J* − 1`` (``inf`` when the loop is unstable, ``nan`` where the reference's J is 0:
+        a noise-free suite's stationary cost, where no ratio is defined)."""
+        return _ratio_gap(self.J, self.J_opt, self.stable)
 
     @property
     def episode_gap(self) -> float:
-        return self.episode_J / self.episode_J_opt - 1.0 if self.stable else math.inf
+        return _ratio_gap(self.episode_J, self.episode_J_opt, self.stable)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (``None`` for ∞)."""
