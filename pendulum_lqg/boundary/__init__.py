@@ -34,15 +34,7 @@ def read_bytes(path: str | os.PathLike[str], *, where: str) -> bytes:
     """The bytes of the regular file ``path``; anything else — missing, a folder, a FIFO, a
     device, larger than :data:`~pendulum_lqg.util.limits.MAX_INPUT_BYTES` — is one
     :class:`ConfigError` line starting with ``where``."""
-    p = Path(path)
-    try:
-        mode = os.stat(p).st_mode
-    except FileNotFoundError:
-        raise ConfigError(f"{where}: no file {p}") from None
-    except OSError as exc:
-        raise ConfigError(f"{where}: cannot read {p}: {exc.strerror or exc}") from None
-    if not stat.S_ISREG(mode):
-        raise ConfigError(f"{where}: {p} is {file_kind(mode)}; expected a regular file")
+    p = regular_file(path, where=where)
     try:
         fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     except OSError as exc:

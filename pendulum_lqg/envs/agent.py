@@ -100,8 +100,7 @@ class LQGAgent:
         assert space.shape is not None
         self._obs_dim = int(space.shape[0])
         #: the estimate's size (the plant's states)
-        self._n = (int(base.config.plant_file.n_states) if base.config.plant_file is not None
-                   else 4)
+        self._n = int(np.shape(self.policy.K)[-1])
 
     @property
     def name(self) -> str:

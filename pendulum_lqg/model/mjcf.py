@@ -138,17 +138,7 @@ class MjcfPlant(LTIPlant):
 
     def fingerprint(self) -> str:
         """SHA-256 of the linear model's fields, the MJCF file's bytes and the equilibrium."""
-        digest = hashlib.sha256()
-        for f in fields(LTIPlant):
-            if f.name in ("path", "description"):
-                continue
-            value = getattr(self, f.name)
-            digest.update(f.name.encode())
-            if isinstance(value, np.ndarray):
-                digest.update(repr(value.shape).encode() + np.ascontiguousarray(
-                    value, dtype=float).tobytes())
-            else:
-                digest.update(repr(value).encode())
+        digest = self.linear_digest()
         assert self.mjcf is not None
         digest.update(hashlib.sha256(self.mjcf.read_bytes()).digest())
         digest.update(np.ascontiguousarray(self.joints.qpos_eq, dtype=float).tobytes())

@@ -61,6 +61,19 @@ def rl_installed(monkeypatch):
 
 
 # ---- 1. the run folder's lock ------------------------------------------------------------------
+
+def _stopped_sysid_lqg(out):
+    """A ``sysid-lqg`` run into ``out`` stopped at its first progress line (as Ctrl-C would):
+    its checkpoint and the identification's episodes are on disk."""
+    box = {}
+
+    def log(line):
+        box["ctx"].stop.requested = True
+
+    box["ctx"] = ctx = prepare("sysid-lqg", seed=0, out=out, log=log)
+    with pytest.raises(Stopped):
+        run(ctx)
+
 def test_item01_train_locks_its_run_folder(capsys, tmp_path, few_curve_episodes):
     """Two runs of one method and seed into one --out, a --force during a run and two --resume
     of one checkpoint: the second is refused with bench's line, and loses nothing."""
@@ -253,14 +266,7 @@ def test_item14_train_resume_validates_the_curve_beside_its_checkpoint(
 ])
 def test_item14_sysid_lqg_resume_validates_its_checkpoint(capsys, tmp_path, identification,
                                                           few_curve_episodes, edit, needle):
-    box = {}
-
-    def log(line):
-        box["ctx"].stop.requested = True
-
-    box["ctx"] = ctx = prepare("sysid-lqg", seed=0, out=tmp_path, log=log)
-    with pytest.raises(Stopped):
-        run(ctx)
+    _stopped_sysid_lqg(tmp_path)
     path = tmp_path / "sysid-lqg-seed0-checkpoint.json"
     if edit is None:
         (tmp_path / "sysid-lqg-seed0-checkpoint-data.npz").write_bytes(b"PK\x03\x04 truncated")
@@ -320,14 +326,7 @@ def test_item16_a_fifo_as_an_sb3_checkpoint_is_refused(capsys, tmp_path, rl_inst
 
 def test_item16_a_fifo_as_the_sysid_lqg_data_is_refused(capsys, tmp_path, identification,
                                                         few_curve_episodes):
-    box = {}
-
-    def log(line):
-        box["ctx"].stop.requested = True
-
-    box["ctx"] = ctx = prepare("sysid-lqg", seed=0, out=tmp_path, log=log)
-    with pytest.raises(Stopped):
-        run(ctx)
+    _stopped_sysid_lqg(tmp_path)
     data = tmp_path / "sysid-lqg-seed0-checkpoint-data.npz"
     data.unlink()
     os.mkfifo(data)
