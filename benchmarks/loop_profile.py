@@ -27,7 +27,8 @@ from mujoco.batch import Batch
 
 from pendulum_lqg.core.runner import run_episodes
 from pendulum_lqg.core.scenario import Scenario
-from pendulum_lqg.model.plant import load_plant, steps_per_period
+from pendulum_lqg.model.interface import steps_per_period
+from pendulum_lqg.model.plant import load_plant
 from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 from pendulum_lqg.util.limits import MAX_BATCH_EPISODES
 from pendulum_lqg.util.scripts import ScriptParser, int_in, number, run_script

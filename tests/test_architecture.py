@@ -347,3 +347,36 @@ def test_the_plant_is_a_type_not_a_flag():
             for i, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
             if flag.search(line)]
     assert not hits, hits
+
+
+#: The concrete plants: the layers that run any plant (core/, policies/) ask none of them.
+CONCRETE_PLANTS = ("pendulum_lqg.model.plant", "pendulum_lqg.model.linearize",
+                   "pendulum_lqg.model.mjcf", "pendulum_lqg.model.mjcf_linear",
+                   "pendulum_lqg.model.catalog")
+
+
+def _concrete_plant_imports(paths: list[Path]) -> list[str]:
+    modules = set(_modules())
+    return [f"{p.relative_to(ROOT)} imports {m}" for p in paths
+            for m in sorted(_imports(p, _module_name(p), modules)) if m in CONCRETE_PLANTS]
+
+
+def test_core_and_policies_ask_the_plant_interface_not_a_concrete_plant():
+    """``core/`` and ``policies/`` ask a plant through :mod:`pendulum_lqg.model.interface` only
+    (and read a scenario's :mod:`pendulum_lqg.model.overrides`): no import of the cart-pole's
+    ``model/plant.py`` or ``model/linearize.py`` (nor of a plant file's modules), at module or
+    function level, type-only imports included."""
+    paths = sorted([*(PKG / "core").rglob("*.py"), *(PKG / "policies").rglob("*.py")])
+    assert len(paths) > 20
+    assert _concrete_plant_imports(paths) == []
+
+
+def test_the_concrete_plant_check_sees_a_function_level_import(tmp_path):
+    bad = PKG / "core" / "_probe_concrete_import.py"
+    bad.write_text("def f():\n    from pendulum_lqg.model.linearize import linearize\n"
+                   "    return linearize\n", encoding="utf-8")
+    try:
+        assert _concrete_plant_imports([bad]) == [
+            "pendulum_lqg/core/_probe_concrete_import.py imports pendulum_lqg.model.linearize"]
+    finally:
+        bad.unlink()

@@ -203,7 +203,7 @@ def _sampled_loops(spec: Any, plant: Any, lin: Any, T0: float, log: Log,
     """Each configuration's sampled loop (its policy on the exact ZOH plant at its period): a row
     of margins each, and the Nyquist rows of those at the first configuration's period ``T0``."""
     from pendulum_lqg.analysis import margins as M
-    from pendulum_lqg.model.linearize import discretize_zoh
+    from pendulum_lqg.model.interface import discretize_zoh
     from pendulum_lqg.policies.lqg import design_policy
 
     prm = spec.study_params

@@ -60,12 +60,13 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from pendulum_lqg.bench.sources import PlantSource, choose_source
 from pendulum_lqg.bench.study_params import parse_study_params
-from pendulum_lqg.core import defaults
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.model.plant import ModelOverrides, Plant
+from pendulum_lqg.model.overrides import ModelOverrides
+from pendulum_lqg.model.plant import Plant
 from pendulum_lqg.names import CONTROLLERS, OBSERVERS
 from pendulum_lqg.policies.spec import DesignSpec
+from pendulum_lqg.problem import defaults
 from pendulum_lqg.problem.declare import check
 from pendulum_lqg.problem.errors import check_keys
 from pendulum_lqg.problem.experiment import RUN_SETTINGS, SCENARIO_GRID_KEYS, SCENARIO_KEYS

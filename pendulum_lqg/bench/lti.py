@@ -2,8 +2,9 @@
 
 An experiment file that names an LTI plant file (:mod:`pendulum_lqg.model.lti`, relative to the
 experiment's folder) runs its grid on that plant instead of the cart-pole, through the same loop
-(:mod:`pendulum_lqg.core.layout`): the file gives the period, the initial state, the noise, the
-cost weights and the limits; the experiment chooses what a scenario chooses beside them::
+(its :class:`~pendulum_lqg.model.interface.Layout`): the file gives the period, the initial
+state, the noise, the cost weights and the limits; the experiment chooses what a scenario
+chooses beside them::
 
     name = "double_integrator"
     lti_file = "lti/double_integrator.toml"
@@ -130,11 +131,10 @@ def lti_policy(cfg: Any, scenario: Any, spec: Any) -> Any:
 
 def lti_fields(cfg: Any) -> tuple[str, ...]:
     """The episode columns of a configuration on an LTI plant (named after its states)."""
-    from pendulum_lqg.core.layout import layout
     from pendulum_lqg.core.metrics import layout_fields
 
     scenario, _ = lti_build(cfg)
-    return layout_fields(layout(lti_plant(cfg.lti_file), scenario))
+    return layout_fields(lti_plant(cfg.lti_file).layout(scenario))
 
 
 def lti_theory_entry(cfg: Any) -> dict[str, Any] | None:

@@ -44,7 +44,8 @@ from mujoco import rollout as mj_rollout
 from pendulum_lqg.core.physics import thread_count
 from pendulum_lqg.core.runner import run_episodes, shard_count
 from pendulum_lqg.core.scenario import Scenario
-from pendulum_lqg.model.plant import load_plant, steps_per_period
+from pendulum_lqg.model.interface import steps_per_period
+from pendulum_lqg.model.plant import load_plant
 from pendulum_lqg.policies.lqg import DesignSpec, design_policy
 
 #: Fewest physics steps a rollout chunk (one thread-pool task) should hold: each chunk costs a

@@ -23,7 +23,8 @@ from pendulum_lqg.errors import PendulumLQGError
 if TYPE_CHECKING:
     from pendulum_lqg.core.noise import NoiseModel
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.model.plant import ModelOverrides, Plant
+    from pendulum_lqg.model.overrides import ModelOverrides
+    from pendulum_lqg.model.plant import Plant
     from pendulum_lqg.policies.spec import DesignSpec
 
 
@@ -63,7 +64,7 @@ class MJCFSource:
     def build(self, cfg: Any) -> tuple[Scenario, DesignSpec]:
         from pendulum_lqg.core.noise import NoiseModel
         from pendulum_lqg.core.scenario import Scenario
-        from pendulum_lqg.model.plant import ModelOverrides
+        from pendulum_lqg.model.overrides import ModelOverrides
         from pendulum_lqg.policies.spec import DesignSpec
 
         noise = NoiseModel(**cfg.noise)
@@ -103,8 +104,6 @@ class MJCFSource:
         return build_policy(cfg.plugin, plant=nominal, scenario=scenario, spec=spec)
 
     def fields(self, cfg: Any) -> tuple[str, ...]:
-        from pendulum_lqg.core.metrics import EPISODE_FIELDS
-
         return EPISODE_FIELDS
 
     def theory(self, cfg: Any) -> dict[str, Any] | None:
@@ -154,10 +153,8 @@ class LTISource:
     def validate(self, cfg: Any) -> None:
         """What its loop cannot run (:meth:`~pendulum_lqg.model.lti.LTIPlant.layout`) and its
         design, refused now."""
-        from pendulum_lqg.core.layout import layout
-
         scenario, spec = self.build(cfg)     # the Scenario checks the duration ceiling
-        layout(self.plants(cfg)[1], scenario)
+        self.plants(cfg)[1].layout(scenario)
         self.policy(cfg, scenario, spec, None)
 
     def policy(self, cfg: Any, scenario: Scenario, spec: DesignSpec, nominal: Any) -> Any:
@@ -200,8 +197,19 @@ def designed(model_file: str | None, control_period: float, noise: NoiseModel,
              spec: DesignSpec, delays: tuple[int, int]) -> None:
     """Design a configuration's built-in policy on the nominal plant (the design ignores the
     noise scale; a grid over noise, model scales or policies repeats few designs)."""
-    from pendulum_lqg.model.plant import ModelOverrides
+    from pendulum_lqg.model.overrides import ModelOverrides
     from pendulum_lqg.policies.lqg import design_policy
 
     design_policy(simulated_plant(model_file, ModelOverrides()), control_period, noise, spec,
                   delays=delays)
+
+
+def _cartpole_fields() -> tuple[str, ...]:
+    from pendulum_lqg.core.metrics import layout_fields
+    from pendulum_lqg.model.plant import CARTPOLE
+
+    return layout_fields(CARTPOLE)
+
+
+#: Columns of one episode row of the cart-pole, in order (its layout's).
+EPISODE_FIELDS: tuple[str, ...] = _cartpole_fields()

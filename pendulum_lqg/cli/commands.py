@@ -15,7 +15,7 @@ from pendulum_lqg.cli.theory import declared_fields, run_theory_lines
 def scenario_from_args(args: argparse.Namespace) -> Any:
     """The :class:`~pendulum_lqg.core.scenario.Scenario` of ``run``'s options (the cart-pole)."""
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.model.plant import Randomization
+    from pendulum_lqg.model.overrides import Randomization
 
     noise = noise_from_args(args, scale=args.noise_scale)
     return Scenario(control_period=args.dt, noise=noise, x0=(0.0, args.theta0, 0.0, 0.0),
@@ -217,7 +217,7 @@ def _run_in_batches(plant: Any, scenario: Any, policy: Any, args: argparse.Names
     """``run_episodes`` over ``--episodes`` in batches (memory flat in the episode count; the rows
     do not depend on the batching), with its progress on stderr (:mod:`pendulum_lqg.util.progress`)."""
     from pendulum_lqg.core.runner import BatchResult, run_episodes
-    from pendulum_lqg.model.plant import steps_per_period
+    from pendulum_lqg.model.interface import steps_per_period
     from pendulum_lqg.util import limits
     from pendulum_lqg.util.progress import Progress
 

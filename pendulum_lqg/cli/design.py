@@ -169,11 +169,11 @@ def _design_plant_file(args: argparse.Namespace) -> int:
     plant = load_named_plant(args.plant_ref, what="--plant")
     d = design_lti_all(plant)
     data = _lti_data(args.plant_ref, plant, d)
-    fd = plant.transition_fd()
+    fd = plant.transition(plant.control_period)
     if fd is not None:
-        data.update(Phi_transition_fd=fd[0], Gamma_transition_fd=fd[1],
-                    zoh_vs_transition_fd_max_abs=max(float(np.max(np.abs(plant.Phi - fd[0]))),
-                                                     float(np.max(np.abs(plant.Gamma - fd[1])))),
+        data.update(Phi_transition_fd=fd.Phi, Gamma_transition_fd=fd.Gamma,
+                    zoh_vs_transition_fd_max_abs=max(float(np.max(np.abs(plant.Phi - fd.Phi))),
+                                                     float(np.max(np.abs(plant.Gamma - fd.Gamma)))),
                     model=str(plant.mjcf), force_limit=plant.limits_per_input,
                     state_limits=plant.state_limits, kind=plant.kind_label)
     for key in [k for k in data if k.endswith("_poles")]:

@@ -8,7 +8,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from typing import Any, cast
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -62,9 +63,9 @@ _SCENARIO_FIELDS = ("control_period", "duration", "estimate0", "force_limit", "p
 def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, dict[str, Any]]:
     """``run`` with ``--lti FILE`` (``name``: the policy, ``controller+observer``): the plant, the
     scenario, the policy and the configuration to report; ``cmd_run`` runs them."""
-    from pendulum_lqg.core.layout import layout
     from pendulum_lqg.core.rules import limits
     from pendulum_lqg.model.catalog import load_named_plant
+    from pendulum_lqg.policies.loading import build_policy, is_plugin_ref
     from pendulum_lqg.policies.lti import design_lti_policy, lti_scenario
     from pendulum_lqg.util.limits import MAX_RUN_EPISODES, check_at_most
 
@@ -79,9 +80,10 @@ def lti_run_setup(args: argparse.Namespace, name: str) -> tuple[Any, Any, Any, d
                             actuator_delay=args.actuator_delay, dropout=args.dropout,
                             actuator_tau=args.actuator_tau, burn_in=args.burn_in,
                             simulator=plant_simulator(args, plant))
-    lay = layout(plant, scenario)
-    u_max = limits(cast(Any, plant), scenario)[2]        # (the core types its plants as Plant)
-    policy = design_lti_policy(plant, name, u_max=u_max)
+    lay = plant.layout(scenario)
+    u_max = limits(plant, scenario)[2]
+    policy = (build_policy(name, plant=plant, scenario=scenario, base_dir=Path.cwd())
+              if is_plugin_ref(name) else design_lti_policy(plant, name, u_max=u_max))
     check_at_most("--episodes", args.episodes, MAX_RUN_EPISODES,
                   "run keeps every row in memory; bench streams larger studies to disk")
     config = {"policy": name, "seed": args.seed, "episodes": args.episodes,
@@ -124,13 +126,7 @@ def _limit(value: Any) -> Any:
 
 
 def _check_options(args: argparse.Namespace) -> None:
-    """Refuse, one line each, the cart-pole's options given with ``--lti``."""
-    from pendulum_lqg.policies.loading import is_plugin_ref
-
-    if args.policy is not None and is_plugin_ref(args.policy):
-        raise cfg_error("--policy: with --plant NAME|FILE, a built-in 'controller+observer' "
-                        "(dlqr/lqr + none/kalman/kalman-predictor/luenberger); plug-ins take the "
-                        "cart-pole's PolicyContext")
+    """Refuse, one line each, the cart-pole's options given with a plant file."""
     refuse_cartpole_options(args, {**CARTPOLE_OPTIONS, **_RUN_ONLY})
 
 

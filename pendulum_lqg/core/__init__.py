@@ -11,8 +11,6 @@ module                  concept
 ======================  =====================================================================
 ``scenario``            :class:`~pendulum_lqg.core.scenario.Scenario`: the control problem
 ``scenario_fields``     its declared settings as dataclass fields (generated, do not edit)
-``defaults``            the defaults of an episode, written once
-``layout``              the plant's vectors as the loop sees them: sizes, names, roles
 ``rules``               the rules of a control period, each one function (below)
 ``period``              the period buffer the physics, the rules and the metrics share
 ``physics/``            the backends behind :class:`~pendulum_lqg.core.physics.base.Physics`

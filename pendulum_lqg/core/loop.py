@@ -16,9 +16,9 @@ of each running row:
    the per-episode metrics (:class:`~pendulum_lqg.core.metrics.MetricsAccumulator`).
 
 The plant is the cart-pole (MuJoCo or its linearisation) or a linear plant given as matrices
-(:mod:`pendulum_lqg.model.lti`): :mod:`~pendulum_lqg.core.layout` says what differs (the lengths and
-names of x and y, ``y = C x``, the initial state, the noise covariances, the cost weights, the
-failure limits); the loop and its rules are the same.
+(:mod:`pendulum_lqg.model.lti`): its :class:`~pendulum_lqg.model.interface.Layout` says what
+differs (the lengths and names of x and y, ``y = C x``, the initial state, the noise
+covariances, the cost weights, the failure limits); the loop and its rules are the same.
 
 The rows of one call may be any number, one included: the single Gymnasium env is a one-row
 simulator (:meth:`Simulator.step_one` is :meth:`Simulator.step` without the metrics and the
@@ -34,7 +34,6 @@ from typing import Literal
 import numpy as np
 
 from pendulum_lqg.core import rules
-from pendulum_lqg.core.layout import layout
 from pendulum_lqg.core.metrics import MetricsAccumulator
 from pendulum_lqg.core.noise import DRAW_LOCK, NoiseStream
 from pendulum_lqg.core.period import PeriodBuffer, PeriodView, as_slice
@@ -42,7 +41,7 @@ from pendulum_lqg.core.physics import BACKENDS, Physics, make_physics, thread_co
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.sensing import SensingActuation
 from pendulum_lqg.errors import ConfigError, PendulumLQGError
-from pendulum_lqg.model.plant import Plant, steps_per_period
+from pendulum_lqg.model.interface import SimulatedPlant, steps_per_period
 
 
 @dataclass
@@ -76,8 +75,8 @@ class Simulator:
 
     Parameters
     ----------
-    plant : the simulated plant: the cart-pole's :class:`~pendulum_lqg.model.plant.Plant` or an
-        :class:`~pendulum_lqg.model.lti.LTIPlant` (with ``scenario.plant = "linear-zoh"``)
+    plant : the simulated plant, any :class:`~pendulum_lqg.model.interface.SimulatedPlant` (the
+        cart-pole, a plant file's MuJoCo model, a plant given as matrices)
     scenario : timing, noise, initial state, failure rule and cost
     backend : ``"rollout"`` (``mujoco.batch`` over the batch, several threads) or ``"step"``
         (a plain ``mj_step`` loop); a scenario with a linear ``plant`` uses the linear backend
@@ -90,13 +89,12 @@ class Simulator:
     pickles (the physics is made again on unpickling).
     """
 
-    def __init__(self, plant: Plant, scenario: Scenario, *,
+    def __init__(self, plant: SimulatedPlant, scenario: Scenario, *,
                  backend: Literal["rollout", "step"] = "rollout", nthread: int | None = None,
                  streamed_metrics: bool = True) -> None:
         if backend not in BACKENDS:
             raise ConfigError(f"backend: expected one of {', '.join(BACKENDS)}, got {backend!r}")
         self.plant, self.scenario, self.backend = plant, scenario, backend
-        self.model = plant.model
         self.h = plant.timestep
         self.k = steps_per_period(plant, scenario.control_period)
         self.dt = self.k * self.h
@@ -104,7 +102,7 @@ class Simulator:
         _, self.track, self.u_max = rules.limits(plant, scenario)     # the limits in force
         # what saturates u: u_max, or for an LTI plant of m inputs one limit per input (m,)
         self.u_limit: float | np.ndarray = self.u_max
-        self.layout = lay = layout(plant, scenario)
+        self.layout = lay = plant.layout(scenario)
         self.nx, self.m = lay.n, lay.m
         if self.m > 1:                          # one limit per input (the scenario's: for all)
             self.u_limit = np.broadcast_to(np.asarray(self.u_max, dtype=float), (self.m,)).copy()

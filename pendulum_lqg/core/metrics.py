@@ -16,10 +16,10 @@ With a burn-in (``Scenario.burn_in``, ``skip`` whole control periods), the RMS m
 integrals and their alive time); the cost, the maxima, the saturated fraction and the settling
 time take the whole episode. Without one (the default) every sum is the one it always was.
 
-These are the cart-pole's columns (:data:`EPISODE_FIELDS`). An LTI plant's
-(:mod:`~pendulum_lqg.core.layout`) are named after its file's states: ``rms_NAME`` and
-``max_abs_NAME`` of every state, ``rms_est_err_NAME``, and no settling time (it has no pole
-angle) — :func:`episode_fields`.
+The columns are named after the plant's :class:`~pendulum_lqg.model.interface.Layout`
+(:func:`layout_fields`): the cart-pole's ``rms_theta``, ``rms_p``, … and the settling time of θ;
+a plant file's ``rms_NAME`` and ``max_abs_NAME`` of every state, ``rms_est_err_NAME``, and no
+settling time (it has no pole angle named as one).
 
 Aggregates: success rate with its 95 % Wilson score interval; mean ± standard error for the rest.
 """
@@ -32,10 +32,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pendulum_lqg.core.rules import FAIL_NONE, FAIL_REASONS, period_integrals
-from pendulum_lqg.model.plant import STATE_NAMES
 
 if TYPE_CHECKING:
-    from pendulum_lqg.core.layout import Layout
+    from pendulum_lqg.model.interface import Layout
 
 
 def est_fields(states: tuple[str, ...]) -> tuple[str, ...]:
@@ -56,7 +55,7 @@ def episode_fields(reported: tuple[str, ...], states: tuple[str, ...], *,
 
 
 def layout_fields(layout: Layout) -> tuple[str, ...]:
-    """The episode columns of a plant's :class:`~pendulum_lqg.core.layout.Layout`."""
+    """The episode columns of a plant's :class:`~pendulum_lqg.model.interface.Layout`."""
     return episode_fields(tuple(layout.states[c] for c in layout.order), layout.states,
                           settle=layout.settle is not None, inputs=layout.inputs)
 
@@ -66,10 +65,6 @@ def summary_metrics(fields: tuple[str, ...]) -> tuple[str, ...]:
     return (*fields[fields.index("cost"):], "time_to_failure")
 
 
-EST_FIELDS = est_fields(STATE_NAMES)
-
-#: Columns of one episode row of the cart-pole, in order.
-EPISODE_FIELDS: tuple[str, ...] = episode_fields(("theta", "p"), STATE_NAMES, settle=True)
 
 
 def _update(ids: np.ndarray | slice, arr: np.ndarray, op: Any, v: Any) -> None:
@@ -92,7 +87,7 @@ class MetricsAccumulator:
     weights : (5,) ``h·[diag(Q), R]`` (see :func:`~pendulum_lqg.core.rules.period_integrals`)
     u_max : actuator limit [N] (the saturated-time metric)
     settle_band : the ``|θ|`` band of the settling time [rad]
-    layout : the plant's :class:`~pendulum_lqg.core.layout.Layout` (default: the cart-pole's)
+    layout : the plant's :class:`~pendulum_lqg.model.interface.Layout` (its columns)
     skip : control periods at the start of each episode left out of the RMS metrics (the
         burn-in; module docstring)
 
@@ -115,16 +110,14 @@ class MetricsAccumulator:
     rms_alive: np.ndarray           # the alive time after the burn-in (used only with one)
 
     def __init__(self, n: int, *, h: float, k: int, weights: np.ndarray, u_max: float | np.ndarray,
-                 settle_band: float, layout: Layout | None = None, skip: int = 0) -> None:
-        from pendulum_lqg.core.layout import CARTPOLE
-
+                 settle_band: float, layout: Layout, skip: int = 0) -> None:
         self.h, self.k = h, k
         # a period enters the RMS sums when its start time t ≥ (skip − ½)·T: t is a running
         # float sum of T, so half a period of margin decides exactly the periods n ≥ skip
         self.skip_time = (skip - 0.5) * k * h if skip > 0 else 0.0
         self.weights, self.u_max = weights, u_max
         self.band = settle_band
-        lay = CARTPOLE if layout is None else layout
+        lay = layout
         self.m, self.nx, self.order, self.settle_col = lay.reported, lay.n, lay.order, lay.settle
         self.names = tuple(lay.states[c] for c in lay.order)
         self.inputs = lay.inputs
@@ -243,7 +236,7 @@ class MetricsAccumulator:
         return np.arange(ids.start, ids.stop) if isinstance(ids, slice) else ids
 
     def rows(self, ids: np.ndarray, seeds: np.ndarray | None = None) -> list[dict[str, Any]]:
-        """Episode records (:attr:`fields`; the cart-pole's :data:`EPISODE_FIELDS`) for the ids.
+        """Episode records (:attr:`fields`, the layout's) for the ids.
 
         Computed column by column over the ids (the same IEEE divisions and square roots as one
         episode at a time, at a fraction of the per-number cost), then turned into dicts."""
@@ -312,24 +305,20 @@ def mean_se(values: np.ndarray) -> tuple[float, float]:
     return (float(v.mean()), se)
 
 
-SUMMARY_METRICS: tuple[str, ...] = summary_metrics(EPISODE_FIELDS)
-
-
 def _row_metrics(rows: list[dict[str, Any]]) -> tuple[str, ...]:
-    """The metrics of these rows: the cart-pole's if the rows hold them all, else those of the
-    rows' own columns (from ``cost`` on)."""
+    """The metrics of these rows: those of the rows' own columns (from ``cost`` on; none for
+    rows without one)."""
     keys = tuple(rows[0]) if rows else ()
-    if not keys or all(m in rows[0] for m in SUMMARY_METRICS) or "cost" not in keys:
-        return SUMMARY_METRICS
+    if "cost" not in keys:
+        return ()
     return tuple(dict.fromkeys((*summary_metrics(keys), "time_to_failure")))
 
 
 def summarize(rows: list[dict[str, Any]], metrics: tuple[str, ...] | None = None,
               ) -> dict[str, Any]:
     """Aggregate episode rows: success rate with Wilson 95 % CI, mean ± SE of each metric
-    (``metrics``: by default the cart-pole's when the rows hold its columns, else
-    :func:`summary_metrics` of the rows' own columns, so a plant given as matrices is summarised
-    by its state names).
+    (``metrics``: by default :func:`summary_metrics` of the rows' own columns, so any plant is
+    summarised by its state names).
 
     ``cost`` and ``settling_time`` are averaged over the successful episodes only (a failed
     episode's cost stops at the failure and would flatter it); the others over all episodes, and

@@ -124,10 +124,6 @@ class NoiseModel:
         """Measurement density equivalent to per-sample covariance V at period dt: ``V·dt``."""
         return self.V * dt
 
-    @property
-    def n_process(self) -> int:
-        return 4 if self.process == "state" else 2
-
 
 class NoiseStream:
     """Per-episode noise for a batch, drawn in fixed blocks from each episode's own generator.
@@ -181,7 +177,8 @@ class NoiseStream:
 
     def _lti_noise(self, covariances: tuple[np.ndarray, np.ndarray], s: float,
                    ) -> tuple[np.ndarray, np.ndarray]:
-        """An LTI plant's noise (:mod:`~pendulum_lqg.core.layout`): the state's jump over a period
+        """An LTI plant's noise (its :class:`~pendulum_lqg.model.interface.Layout`'s covariances):
+        the state's jump over a period
         ``δx ~ N(0, s²·Wd)`` and ``v ~ N(0, s²·V)``, each from as many unit normals as it has
         entries. Diagonal covariances scale the normals column by column (as the cart-pole's); a
         full one mixes them, ``[δx, v] = F z`` with ``F Fᵀ = s²·blockdiag(Wd, V)`` (Cholesky, or

@@ -12,7 +12,7 @@ So ``z[:, :k]`` is ``[x, u]`` at the start of each physics step — what the cos
 ``z[:, 1:k+1, :4]`` the state after each step — what the failure rule checks. A backend writes the
 k states (rows 1 … k, columns 0 … 3), the loop the start state, the forces and the end state.
 
-An LTI plant of ``n_x`` states and ``m`` inputs (:mod:`~pendulum_lqg.core.layout`) has rows
+An LTI plant of ``n_x`` states and ``m`` inputs (:class:`~pendulum_lqg.model.interface.Layout`) has rows
 ``z = [x, u]`` of ``n_x + m`` numbers, the same layout: the width is the length of the bounds row.
 """
 

@@ -26,7 +26,7 @@ the state is not finite or runs away (``|x_i| > RUNAWAY``, or MuJoCo reset the d
 instability); the reason is ``pole_fell``, ``track_limit`` or ``diverged``. The end-of-period state
 (after the state noise) is checked for divergence too.
 
-An LTI plant (:mod:`pendulum_lqg.core.layout`) has no pole and no track: only its declared
+An LTI plant (:class:`~pendulum_lqg.model.interface.Layout`) has no pole and no track: only its declared
 ``state_limits`` (``|x_i| > limit_i``: ``state_limit``) and divergence end its episodes.
 
 The arrays these rules read are one control period of each row in the layout of

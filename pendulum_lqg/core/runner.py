@@ -30,7 +30,7 @@ from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import episode_generators, episode_seeds
 from pendulum_lqg.core.trajectory import Trajectory, TrajectoryLog, estimator_snapshot
 from pendulum_lqg.errors import PendulumLQGError
-from pendulum_lqg.model.plant import Plant
+from pendulum_lqg.model.interface import SimulatedPlant
 from pendulum_lqg.util.limits import check_episodes
 
 
@@ -113,7 +113,7 @@ class _Cancelled(Exception):
     """Another shard failed or the caller was interrupted: stop this one."""
 
 
-def run_episodes(plant: Plant, scenario: Scenario, policy: PolicyProtocol, *, seed: int,
+def run_episodes(plant: SimulatedPlant, scenario: Scenario, policy: PolicyProtocol, *, seed: int,
                  episodes: Iterable[int] | np.ndarray, backend: Literal["rollout", "step"] = "rollout",
                  nthread: int | None = None, trajectory: bool = False,
                  initial_states: np.ndarray | None = None) -> BatchResult:
@@ -184,7 +184,8 @@ def _number_and_cover(trajectories: list[Trajectory], episodes: list[int],
             tr.P = P
 
 
-def _run_batch(plant: Plant, scenario: Scenario, policy: PolicyProtocol, seed: int, episodes: list[int],
+def _run_batch(plant: SimulatedPlant, scenario: Scenario, policy: PolicyProtocol, seed: int,
+               episodes: list[int],
                backend: Literal["rollout", "step"], nthread: int, trajectory: bool,
                initial_states: np.ndarray | None, stop: threading.Event | None,
                t0: float) -> BatchResult:

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.core.scenario_fields import ScenarioFields
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.model.plant import ModelOverrides, Randomization
+from pendulum_lqg.model.overrides import ModelOverrides, Randomization
 from pendulum_lqg.problem.declare import Converted, NonNegative, check
 from pendulum_lqg.util.limits import MAX_DELAY_PERIODS, check_control_period, check_duration
 
@@ -72,7 +72,7 @@ class Scenario(ScenarioFields):
         rate: over physics step j the actuator applies the lag's exact response at the end of
         that step, ``f_j = u + (f_{j−1} − u)·e^{−h/τ}``
     randomize : per-episode parameter randomisation of the simulated plant
-        (:class:`~pendulum_lqg.model.plant.Randomization`; a mapping such as
+        (:class:`~pendulum_lqg.model.overrides.Randomization`; a mapping such as
         ``{"pole_mass_scale": (0.8, 1.2)}`` is accepted)
     burn_in : seconds at the start of an episode left out of the RMS metrics (``rms_*``,
         ``rms_u``, ``rms_est_err_*``), rounded to whole control periods and shorter than the

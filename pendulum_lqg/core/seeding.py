@@ -40,7 +40,7 @@ def child_generator(generator: np.random.Generator) -> np.random.Generator:
     Drawn from only when a scenario randomises parameters or drops samples, so the episode's own
     generator — the initial state, then the noise blocks — draws exactly what it draws without
     those features. The child is made at the episode's reset and draws, in order: the three
-    uniforms of :class:`~pendulum_lqg.model.plant.Randomization` (if any range is given), then one
+    uniforms of :class:`~pendulum_lqg.model.overrides.Randomization` (if any range is given), then one
     uniform per control period for the dropouts (if ``dropout > 0``), in blocks. Spawning does not
     advance the parent; it depends only on the parent's seed sequence and on how many children it
     spawned before, so ``default_rng(s)`` and ``gymnasium``'s ``reset(seed=s)`` give the same child.

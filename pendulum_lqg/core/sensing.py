@@ -14,24 +14,24 @@ and emptied when a row (re)starts:
 * actuator lag τ: the first-order response ``f_j = u + (f_{j−1} − u)·e^{−h/τ}`` at the end of
   each physics step j, so the physics gets a force per step;
 * randomised models: each episode's simulated model from three uniforms of its child generator
-  (:class:`~pendulum_lqg.model.plant.Randomization`).
+  (:class:`~pendulum_lqg.model.overrides.Randomization`, drawn by the plant:
+  :meth:`~pendulum_lqg.model.interface.MujocoPlant.varied`).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import mujoco
 import numpy as np
 
 from pendulum_lqg.core.noise import UniformStream
 from pendulum_lqg.core.seeding import child_generator
-from pendulum_lqg.model.plant import Randomization, load_plant
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.physics import Physics
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.model.interface import MujocoPlant, SimulatedPlant
 
 
 class SensingActuation:
@@ -46,7 +46,7 @@ class SensingActuation:
     inputs : the length of u (1: u is one number per row)
     """
 
-    def __init__(self, plant: Plant, scenario: Scenario, k: int, *, outputs: int = 2,
+    def __init__(self, plant: SimulatedPlant, scenario: Scenario, k: int, *, outputs: int = 2,
                  inputs: int = 1) -> None:
         self.plant, self.scenario = plant, scenario
         self.outputs = outputs                                  # the length of y
@@ -99,8 +99,10 @@ class SensingActuation:
 
     def _episode_model(self, r: np.ndarray) -> mujoco.MjModel:
         """The simulated model of an episode with randomisation uniforms ``r`` (3,)."""
-        ov = Randomization.apply(self.plant.overrides, self.scenario.randomize.scales(r))
-        return load_plant(self.plant.path, overrides=ov).model
+        # only a MuJoCo plant is randomised (the linear simulators and the plant files refuse
+        # ``randomize`` as the scenario is laid out)
+        plant = cast("MujocoPlant", self.plant)
+        return plant.varied(self.scenario.randomize.scales(r))
 
     def sense(self, y: np.ndarray, rows: np.ndarray, period: np.ndarray) -> np.ndarray:
         """Dropouts (lost samples become nan) and the measurement delay line of ``rows`` (their

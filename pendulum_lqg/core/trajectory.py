@@ -13,8 +13,8 @@ class Trajectory:
 
     Control-rate arrays have one row per control sample ``n`` (time ``t[n]``); ``states`` holds the
     physics-rate states with times ``t_physics``. The shapes are the cart-pole's; an LTI plant's
-    (:mod:`~pendulum_lqg.core.layout`) have its ``n_x`` states and ``p`` outputs in place of 4 and
-    2, and ``y_true = C x``.
+    (:class:`~pendulum_lqg.model.interface.Layout`) have its ``n_x`` states and ``p`` outputs in
+    place of 4 and 2, and ``y_true = C x``.
 
     Attributes
     ----------

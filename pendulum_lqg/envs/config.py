@@ -23,7 +23,8 @@ from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.envs.keywords import EnvKeywords
 from pendulum_lqg.errors import ConfigError, PendulumLQGError, ShapeError
-from pendulum_lqg.model.plant import ModelOverrides, Plant, Randomization, load_plant
+from pendulum_lqg.model.overrides import ModelOverrides, Randomization
+from pendulum_lqg.model.plant import Plant, load_plant
 from pendulum_lqg.problem import defaults
 from pendulum_lqg.problem.declare import PositiveInt, check, coerce, declared
 from pendulum_lqg.problem.env import EnvSettings, env_keywords

@@ -4,6 +4,7 @@
 module          concept
 ==============  ==============================================================================
 ``interface``   ``SimulatedPlant``, what every plant is (``Layout``, limits, models)
+``overrides``   what a scenario changes of the cart-pole's model: overrides, randomisation
 ``plant``       the MuJoCo cart-pole: loading with overrides, read-outs, ``x = [p, θ, ṗ, θ̇]``
 ``linearize``   the cart-pole's continuous ``(A, B, C, D)`` by finite differences
 ``lti``         any linear plant given as matrices (TOML or ``.npz``), sampled at T

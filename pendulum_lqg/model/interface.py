@@ -12,13 +12,16 @@ core, which imports the plants (the layers run model → core, never back).
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import msgspec
 import numpy as np
 
 from pendulum_lqg.errors import ConfigError
 from pendulum_lqg.util.limits import MAX_STEPS_PER_PERIOD, check_control_period
+
+if TYPE_CHECKING:        # the design code (scipy) only where a model is discretised or checked
+    from pendulum_lqg.design.structure import StructureReport
 
 
 class Layout(msgspec.Struct, frozen=True, eq=False):
@@ -71,13 +74,52 @@ class Layout(msgspec.Struct, frozen=True, eq=False):
         return len(self.outputs)
 
 
-class LinearModel(NamedTuple):
-    """The continuous linear model ``ẋ = A x + B u``, ``y = C x + D u`` of a plant."""
+class ContinuousModel(msgspec.Struct, frozen=True):
+    """``ẋ = Ax + Bu + F f``, ``y = Cx + Du``: a plant's continuous linear model (about its
+    equilibrium; :meth:`SimulatedPlant.linear_model`).
+
+    Attributes
+    ----------
+    A : (n, n), B : (n, m) per unit of each input (N or N·m), C : (p, n), D : (p, m)
+    F : (n, nv) input matrix of the joints' generalised forces (``qfrc_applied``; the cart-pole's
+        ``[f_slider (N), τ_hinge (N m)]``), used when process noise enters as forces, or ``None``
+        where the plant has no such noise (a plant given as matrices)
+    """
 
     A: np.ndarray
     B: np.ndarray
     C: np.ndarray
     D: np.ndarray
+    F: np.ndarray | None = None
+
+    def structure(self) -> StructureReport:
+        from pendulum_lqg.design.structure import structure
+
+        return structure(self.A, self.B, self.C)
+
+
+class DiscreteModel(msgspec.Struct, frozen=True):
+    """``x[n+1] = Φ x[n] + Γ u[n]``, ``y[n] = C x[n]`` at period ``dt``."""
+
+    Phi: np.ndarray
+    Gamma: np.ndarray
+    C: np.ndarray
+    dt: float
+    method: str
+
+    def structure(self) -> StructureReport:
+        from pendulum_lqg.design.structure import structure
+
+        return structure(self.Phi, self.Gamma, self.C, discrete=True)
+
+
+def discretize_zoh(model: ContinuousModel, dt: float) -> DiscreteModel:
+    """Exact zero-order-hold discretisation of ``(A, B)`` at period ``dt``."""
+    from pendulum_lqg.design import zoh
+
+    Phi, Gamma = zoh(model.A, model.B, dt)
+    return DiscreteModel(Phi=Phi, Gamma=Gamma, C=model.C, dt=float(dt), method="zoh")
+
 
 
 @runtime_checkable
@@ -106,7 +148,7 @@ class SimulatedPlant(Protocol):
         """``(theta_max, track_limit, u_max)`` in force under ``scenario`` (``inf``: none)."""
         ...
 
-    def linear_model(self) -> LinearModel:
+    def linear_model(self) -> ContinuousModel:
         """Its continuous ``(A, B, C, D)`` (the cart-pole's linearisation about the upright)."""
         ...
 
@@ -117,6 +159,52 @@ class SimulatedPlant(Protocol):
 
     def fingerprint(self) -> str:
         """SHA-256 of what defines it (equal for equal plants, stable across runs)."""
+        ...
+
+    @property
+    def u_max(self) -> Any:
+        """The input limit of its actuators in physical units [N or N·m]: one number, or one
+        per input (``inf``: none)."""
+        ...
+
+    def transition(self, period: float) -> DiscreteModel | None:
+        """``(Φ, Γ)`` at ``period`` by a second route, its simulator's own one-step Jacobians
+        composed over the period (MuJoCo's ``mjd_transitionFD``, integrator included), or
+        ``None`` where the matrices are the plant (no other route to check them by)."""
+        ...
+
+
+class MujocoPlant(SimulatedPlant, Protocol):
+    """A plant MuJoCo steps (the cart-pole, a plant file's MJCF): what the MuJoCo backends
+    (:mod:`pendulum_lqg.core.physics`) read of it.
+
+    The state is ``x = [qpos[qpos_index] − x_offset, qvel[qvel_index]]`` (``x_offset``: the
+    equilibrium's joint positions, ``None`` when it is qpos = 0); MuJoCo's ``ctrl`` is
+    ``u / ctrl_gear`` (u in N or N·m).
+    """
+
+    @property
+    def model(self) -> Any:
+        """The compiled ``mujoco.MjModel``."""
+        ...
+
+    @property
+    def qpos_index(self) -> np.ndarray: ...
+
+    @property
+    def qvel_index(self) -> np.ndarray: ...
+
+    @property
+    def x_offset(self) -> np.ndarray | None: ...
+
+    @property
+    def ctrl_gear(self) -> float: ...
+
+    def varied(self, scales: dict[str, float]) -> Any:
+        """The compiled model of one episode of a randomised scenario: its parameters multiplied
+        by ``scales`` (:meth:`Randomization.scales
+        <pendulum_lqg.model.overrides.Randomization.scales>`); refused, one line naming
+        ``randomize``, by a plant that has no such parameters."""
         ...
 
 

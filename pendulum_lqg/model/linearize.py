@@ -5,7 +5,8 @@
 * :func:`discretize_transition` — discrete ``(Φ, Γ)`` at a control period ``T = k·h`` by composing
   ``mjd_transitionFD`` over the ``k`` physics steps (what the simulator really does, integrator
   included);
-* :func:`discretize_zoh` — the same from ``(A, B)`` by exact zero-order hold;
+* the same from ``(A, B)`` by exact zero-order hold is
+  :func:`~pendulum_lqg.model.interface.discretize_zoh` (any plant's linear model);
 * :func:`analytic_linearization` — a rigid-body reference built from the model's own masses, centre of
   mass and inertia, used by the tests to cross-check the finite differences.
 
@@ -16,13 +17,16 @@ from __future__ import annotations
 
 from typing import Protocol
 
-import msgspec
 import mujoco
 import numpy as np
 
-from pendulum_lqg.design import zoh
-from pendulum_lqg.design.structure import StructureReport, structure
-from pendulum_lqg.model.interface import SimulatedPlant, steps_per_period
+from pendulum_lqg.model.interface import (
+    ContinuousModel,
+    DiscreteModel,
+    SimulatedPlant,
+    steps_per_period,
+)
+from pendulum_lqg.model.interface import discretize_zoh as discretize_zoh  # public here too
 
 
 class CartPoleModel(SimulatedPlant, Protocol):
@@ -53,39 +57,6 @@ class CartPoleModel(SimulatedPlant, Protocol):
 
 #: Finite-difference step for states and inputs (central differences: error O(eps²)).
 FD_EPS = 1e-6
-
-
-class ContinuousModel(msgspec.Struct, frozen=True):
-    """``ẋ = Ax + Bu + F f``, ``y = Cx + Du`` about the upright equilibrium.
-
-    Attributes
-    ----------
-    A : (4, 4), B : (4, 1) per newton of cart force, C : (2, 4), D : (2, 1)
-    F : (4, 2) input matrix of generalised forces ``[f_slider (N), τ_hinge (N m)]``
-        (``qfrc_applied``), used when process noise enters as forces
-    """
-
-    A: np.ndarray
-    B: np.ndarray
-    C: np.ndarray
-    D: np.ndarray
-    F: np.ndarray
-
-    def structure(self) -> StructureReport:
-        return structure(self.A, self.B, self.C)
-
-
-class DiscreteModel(msgspec.Struct, frozen=True):
-    """``x[n+1] = Φ x[n] + Γ u[n]``, ``y[n] = C x[n]`` at period ``dt``."""
-
-    Phi: np.ndarray
-    Gamma: np.ndarray
-    C: np.ndarray
-    dt: float
-    method: str
-
-    def structure(self) -> StructureReport:
-        return structure(self.Phi, self.Gamma, self.C, discrete=True)
 
 
 def _equilibrium(plant: CartPoleModel) -> mujoco.MjData:
@@ -142,12 +113,6 @@ def linearize(plant: CartPoleModel, *, eps: float = FD_EPS) -> ContinuousModel:
         fm, _ = _dynamics(plant, data, x0, 0.0, -df)
         F[:, j] = (fp - fm) / (2 * eps)
     return ContinuousModel(A=A, B=B, C=C, D=D, F=F)
-
-
-def discretize_zoh(model: ContinuousModel, dt: float) -> DiscreteModel:
-    """Exact zero-order-hold discretisation of ``(A, B)`` at period ``dt``."""
-    Phi, Gamma = zoh(model.A, model.B, dt)
-    return DiscreteModel(Phi=Phi, Gamma=Gamma, C=model.C, dt=float(dt), method="zoh")
 
 
 def discretize_transition(plant: CartPoleModel, dt: float, *, eps: float = FD_EPS) -> DiscreteModel:

@@ -58,7 +58,7 @@ import numpy as np
 
 from pendulum_lqg.boundary.fields import Invalid, Where, any_text
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.model.interface import Layout, LinearModel
+from pendulum_lqg.model.interface import ContinuousModel, DiscreteModel, Layout
 
 #: The keys of an LTI plant file.
 LTI_KEYS = ("name", "description", "control_period", "A", "B", "C", "G", "Phi", "Gamma",
@@ -186,7 +186,7 @@ class LTIPlant:
         """Given in discrete time (no A, B): only its own (Φ, Γ) exist."""
         return self.A is None
 
-    def transition_fd(self) -> tuple[np.ndarray, np.ndarray] | None:
+    def transition(self, period: float) -> DiscreteModel | None:
         """``(Φ, Γ)`` of a second route (a MuJoCo plant's ``mjd_transitionFD``); ``None``: the
         matrices are the plant, there is no other route to check them by."""
         return None
@@ -214,12 +214,13 @@ class LTIPlant:
         return (math.inf, math.inf,
                 self.u_max if scenario.force_limit is None else scenario.force_limit)
 
-    def linear_model(self) -> LinearModel:
+    def linear_model(self) -> ContinuousModel:
         """``(A, B, C, 0)``; a plant given in discrete time has none (one line naming ``A``)."""
         if self.A is None or self.B is None:
             raise ConfigError(f"A: the LTI plant {self.name!r} is given in discrete time (Phi, "
                               "Gamma); it has no continuous model")
-        return LinearModel(self.A, self.B, self.C, np.zeros((self.n_outputs, self.n_inputs)))
+        return ContinuousModel(A=self.A, B=self.B, C=self.C,
+                               D=np.zeros((self.n_outputs, self.n_inputs)))
 
     def sampled(self, period: float, kind: str = "linear-zoh") -> tuple[np.ndarray, np.ndarray]:
         """``(Φ, Γ)`` at ``period``: its own at its control period, else from ``(A, B)``."""

@@ -39,7 +39,7 @@ import numpy as np
 
 from pendulum_lqg.boundary.fields import Where
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.model.interface import Layout
+from pendulum_lqg.model.interface import DiscreteModel, Layout, steps_per_period
 from pendulum_lqg.model.lti import LTI_KEYS, LTIPlant, lti_from_mapping
 from pendulum_lqg.model.mjcf_linear import JointMap, continuous_model, residual, transition_model
 
@@ -130,11 +130,19 @@ class MjcfPlant(LTIPlant):
         """(m,) ``gear · ctrlrange`` of each actuator (``inf`` for an unlimited one)."""
         return actuator_limits(self.model)
 
-    def transition_fd(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(Φ, Γ)`` of one control period by MuJoCo's ``mjd_transitionFD`` over its k physics
-        steps: the check of the ZOH of ``(A, B)`` (they differ by the integrator's O(h))."""
-        return transition_model(self.model, self.joints, round(self.control_period
-                                                               / self.timestep))
+    def transition(self, period: float) -> DiscreteModel:
+        """``(Φ, Γ)`` at ``period`` by MuJoCo's ``mjd_transitionFD`` over its k physics steps:
+        the check of the ZOH of ``(A, B)`` (they differ by the integrator's O(h))."""
+        k = steps_per_period(self, period)
+        Phi, Gamma = transition_model(self.model, self.joints, k)
+        return DiscreteModel(Phi=Phi, Gamma=Gamma, C=self.C, dt=k * self.timestep,
+                             method="mjd_transitionFD")
+
+    def varied(self, scales: dict[str, float]) -> Any:
+        """Refused: the scales are the cart-pole's masses and length (:meth:`layout` refuses a
+        randomised scenario first)."""
+        raise ConfigError(f"randomize: per-episode models scale the cart-pole's masses and "
+                          f"length; not for the plant {self.name!r}")
 
     def fingerprint(self) -> str:
         """SHA-256 of the linear model's fields, the MJCF file's bytes and the equilibrium."""

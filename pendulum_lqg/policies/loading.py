@@ -52,78 +52,117 @@ if TYPE_CHECKING:
     from pendulum_lqg.core.noise import NoiseModel
     from pendulum_lqg.core.protocol import PolicyProtocol
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.model.interface import Layout, SimulatedPlant
     from pendulum_lqg.policies.lqg import DesignSpec
 
 
 @dataclass(frozen=True, eq=False)
 class PolicyContext:
-    """Everything a policy factory may design from: the nominal plant's models, noise and limits.
+    """Everything a policy factory may design from: the nominal plant's models, noise and limits,
+    in the plant's own sizes (n states, m inputs, p outputs; :attr:`layout` names them).
 
     The models are those of the *nominal* plant (the XML without the scenario's mismatch overrides),
     the same ones the built-in designs use.
 
     Attributes
     ----------
-    A : (4, 4), B : (4, 1), C : (2, 4)
-        Continuous linearisation about the upright, ``ẋ = Ax + Bu``, ``y = Cx``; state
-        ``x = [p, θ, ṗ, θ̇]``, input the cart force [N], output ``y = [p, θ]``.
-    Phi : (4, 4), Gamma : (4, 1)
+    A : (n, n), B : (n, m), C : (p, n)
+        Continuous linear model about the equilibrium, ``ẋ = Ax + Bu``, ``y = Cx`` (the cart-pole:
+        ``x = [p, θ, ṗ, θ̇]``, u the cart force [N], ``y = [p, θ]``); ``A`` and ``B`` are
+        ``None`` for a plant given in discrete time (only ``Phi``, ``Gamma`` exist).
+    Phi : (n, n), Gamma : (n, m)
         Exact zero-order-hold discretisation at the control period ``dt``.
     dt : float
         Control period T [s]: ``act`` is called once per period and its force is held.
-    W : (4, 4)
+    W : (n, n)
         Process-noise spectral density in state form (``G W_in Gᵀ``; units²·s): for the lecture's
-        state noise the state jumps by ``N(0, W·T)`` once per period.
-    V : (2, 2)
-        Measurement-noise covariance per sample [m², rad²].
-    u_max : float
-        Actuator limit in force [N] (the scenario's ``force_limit``, else the model's
-        ``ctrlrange``; ``inf`` when saturation is off): forces are saturated to
-        ``[−u_max, u_max]`` by the core (:func:`pendulum_lqg.core.rules.limits`).
-    Q : (4, 4), R : (1, 1)
-        Weights of the benchmark's cost ``J = ∫ xᵀQx + uᵀRu dt``.
-    plant : pendulum_lqg.model.plant.Plant
-        The nominal MuJoCo plant (advanced use: parameters, the compiled model).
+        state noise the state jumps by ``N(0, W·T)`` once per period. A plant file gives the
+        jump's covariance ``Wd`` over a period; its ``W`` here is ``Wd / T``.
+    V : (p, p)
+        Measurement-noise covariance per sample (the outputs' units²).
+    u_max : float or (m,) array
+        Actuator limit per input in physical units [N or N·m] (the scenario's ``force_limit``,
+        else the model's ``ctrlrange``; ``inf`` when saturation is off): inputs are saturated
+        to ``[−u_max, u_max]`` by the core (:func:`pendulum_lqg.core.rules.limits`).
+    Q : (n, n), R : (m, m)
+        Weights of the benchmark's cost ``J = ∫ xᵀQx + uᵀRu dt`` (a plant file's cross term is in
+        :attr:`N`).
+    plant : pendulum_lqg.model.interface.SimulatedPlant
+        The nominal plant (advanced use: parameters, the compiled model).
     noise : pendulum_lqg.core.noise.NoiseModel
-        The nominal noise model (``W``/``V`` above come from it).
-    G : (4, m)
-        Input matrix of the process noise (I₄ for state noise, the generalised-force map for
+        The nominal noise model of the scenario (the cart-pole's ``W``/``V`` above come from it;
+        a plant file's come from the file).
+    G : (n, q)
+        Input matrix of the process noise (I for state noise, the generalised-force map for
         force noise).
+    Wd : (n, n)
+        Covariance of the process noise accumulated over one control period (what a discrete
+        Kalman filter takes).
+    N : (n, m)
+        Cross weight of the cost ``2 xᵀ N u`` (zeros when there is none).
+    layout : pendulum_lqg.model.interface.Layout
+        The plant's vectors: the names of x, y and u, x₀ and its spread, the per-state limits.
     """
 
-    A: np.ndarray
-    B: np.ndarray
+    A: np.ndarray | None
+    B: np.ndarray | None
     C: np.ndarray
     Phi: np.ndarray
     Gamma: np.ndarray
     dt: float
     W: np.ndarray
     V: np.ndarray
-    u_max: float
+    u_max: Any
     Q: np.ndarray
     R: np.ndarray
-    plant: Plant
+    plant: SimulatedPlant
     noise: NoiseModel
     G: np.ndarray = field(repr=False, default_factory=lambda: np.eye(4))
+    Wd: np.ndarray | None = field(repr=False, default=None)
+    N: np.ndarray | None = field(repr=False, default=None)
+    layout: Layout | None = field(repr=False, default=None)
 
     @classmethod
-    def build(cls, plant: Plant, scenario: Scenario) -> PolicyContext:
+    def build(cls, plant: SimulatedPlant, scenario: Scenario) -> PolicyContext:
         """The context of ``plant`` (nominal) under ``scenario``'s period, noise and cost."""
         from pendulum_lqg.core.rules import limits
-        from pendulum_lqg.model.linearize import discretize_zoh, linearize
-        from pendulum_lqg.model.plant import steps_per_period
-        from pendulum_lqg.policies.observers import noise_design_matrices
+        from pendulum_lqg.model.interface import steps_per_period
+        from pendulum_lqg.policies.observers import (
+            noise_design_matrices,
+            per_sample_process_covariance,
+        )
 
         steps_per_period(plant, scenario.control_period)
-        lin = linearize(plant)
         dt = float(scenario.control_period)
-        disc = discretize_zoh(lin, dt)
-        G, W_in = noise_design_matrices(lin, scenario.noise)
-        return cls(A=lin.A, B=lin.B, C=lin.C, Phi=disc.Phi, Gamma=disc.Gamma, dt=dt,
-                   W=G @ W_in @ G.T, V=scenario.noise.V, u_max=limits(plant, scenario)[2],
-                   Q=np.diag(scenario.cost_Q), R=np.array([[scenario.cost_R]]), plant=plant,
-                   noise=scenario.noise, G=G)
+        lay = plant.layout(scenario)
+        n, m = lay.n, lay.m
+        Phi, Gamma = plant.sampled(dt)
+        try:
+            lin = plant.linear_model()
+            A, B = lin.A, lin.B
+        except ConfigError:                  # given in discrete time: no continuous model
+            lin, A, B = None, None, None
+        if lay.covariances is None:          # the cart-pole: the scenario's noise model
+            assert lin is not None
+            G, W_in = noise_design_matrices(lin, scenario.noise)
+            W, V = G @ W_in @ G.T, scenario.noise.V
+            Wd = per_sample_process_covariance(lin, scenario.noise, dt)
+        else:                                # a plant file's own covariances
+            Wd, V = lay.covariances
+            G, W = np.eye(n), Wd / dt
+        if lay.cost_matrix is not None:
+            Q, N = lay.cost_matrix[:n, :n], lay.cost_matrix[:n, n:]
+            R = lay.cost_matrix[n:, n:]
+        else:
+            Q, N, R = np.diag(lay.cost_Q), np.zeros((n, m)), np.eye(m) * lay.cost_R
+        if lay.C is not None:
+            C = lay.C
+        else:                                # the cart-pole: its sensors' rows
+            assert lin is not None
+            C = lin.C
+        return cls(A=A, B=B, C=C, Phi=Phi, Gamma=Gamma, dt=dt, W=W, V=V,
+                   u_max=limits(plant, scenario)[2], Q=Q, R=R, plant=plant,
+                   noise=scenario.noise, G=G, Wd=Wd, N=N, layout=lay)
 
 
 # ---- names ----------------------------------------------------------------------------------------
@@ -483,7 +522,7 @@ def _short(value: object) -> str:
 
 
 # ---- one way to build any policy ------------------------------------------------------------------
-def build_policy(name: str | None, *, plant: Plant, scenario: Scenario,
+def build_policy(name: str | None, *, plant: SimulatedPlant, scenario: Scenario,
                  spec: DesignSpec | None = None, base_dir: Path | None = None,
                  context: PolicyContext | None = None) -> Any:
     """The policy ``name`` for the nominal ``plant`` under ``scenario`` — built-in or plugin.

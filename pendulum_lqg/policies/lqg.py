@@ -41,8 +41,12 @@ import numpy as np
 from pendulum_lqg import design
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.core.rules import saturate
-from pendulum_lqg.model.linearize import ContinuousModel, discretize_zoh, linearize
-from pendulum_lqg.model.plant import Plant, steps_per_period
+from pendulum_lqg.model.interface import (
+    ContinuousModel,
+    SimulatedPlant,
+    discretize_zoh,
+    steps_per_period,
+)
 from pendulum_lqg.policies.estimators import Estimator, matvec
 from pendulum_lqg.policies.observers import (
     OBSERVER_BUILDERS,
@@ -107,7 +111,7 @@ class Policy:
         return self.estimator.x_hat
 
 
-def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
+def design_policy(plant: SimulatedPlant, control_period: float, noise: NoiseModel,
                   spec: DesignSpec | None = None, *, linear: ContinuousModel | None = None,
                   delays: tuple[int, int] = (0, 0), u_max: float | None = None) -> Policy:
     """Design the policy ``spec`` for ``plant`` at ``control_period`` with the nominal noise.
@@ -118,7 +122,8 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
     control_period : T [s], a multiple of the physics step
     noise : nominal noise model (its ``scale`` is ignored: designs use the nominal densities)
     spec : controller / observer choice and weights
-    linear : a precomputed :func:`~pendulum_lqg.model.linearize.linearize` result (to save time)
+    linear : a precomputed :meth:`plant.linear_model()
+        <pendulum_lqg.model.interface.SimulatedPlant.linear_model>` (to save time)
     delays : ``(measurement, actuator)`` delays in control periods that ``kalman-delay``
         compensates (:func:`delay_periods` of the scenario; the other observers ignore them)
     u_max : the force limit the policy saturates its own output to [N] (default the plant's
@@ -127,7 +132,7 @@ def design_policy(plant: Plant, control_period: float, noise: NoiseModel,
     spec = spec or DesignSpec()
     steps_per_period(plant, control_period)
     dt = float(control_period)
-    lin = linear if linear is not None else linearize(plant)
+    lin = linear if linear is not None else plant.linear_model()
     A, B, C = lin.A, lin.B, lin.C
     if spec.discretization == "zoh":
         disc = discretize_zoh(lin, dt)
@@ -162,7 +167,7 @@ def delay_periods(scenario: object) -> tuple[int, int]:
             int(getattr(scenario, "actuator_delay_periods", 0)))
 
 
-def design_all(plant: Plant, control_period: float, noise: NoiseModel,
+def design_all(plant: SimulatedPlant, control_period: float, noise: NoiseModel,
                spec: DesignSpec | None = None) -> dict[str, Any]:
     """Every design of the project for one plant and period (what ``pendulum-lqg design`` prints).
 
@@ -171,14 +176,12 @@ def design_all(plant: Plant, control_period: float, noise: NoiseModel,
     (filter and predictor gains), continuous / discrete Luenberger, and the separation checks of the
     continuous and the discrete (current-form) LQG loops.
     """
-    from pendulum_lqg.model.linearize import discretize_transition
-
     spec = spec or DesignSpec()
     steps_per_period(plant, control_period)
     dt = float(control_period)
-    lin = linearize(plant)
+    lin = plant.linear_model()
     zoh_model = discretize_zoh(lin, dt)
-    fd_model = discretize_transition(plant, dt)
+    fd_model = plant.transition(dt)
     A, B, C = lin.A, lin.B, lin.C
     Phi, Gamma = zoh_model.Phi, zoh_model.Gamma
     Q, R = spec.Q_matrix, spec.R_matrix
@@ -192,7 +195,7 @@ def design_all(plant: Plant, control_period: float, noise: NoiseModel,
         "lqr": design.lqr(A, B, Q, R),
         "dlqr": design.dlqr(Phi, Gamma, Qd, Rd, N=Nd),
         "kalman": design.kalman(A, G, C, W, noise.V_density(dt)),
-        "dkalman": design.dkalman(Phi, np.eye(4), C, Qd_noise, V := noise.V),
+        "dkalman": design.dkalman(Phi, np.eye(A.shape[0]), C, Qd_noise, V := noise.V),
         "luenberger": design.luenberger(A, C, spec.observer_poles),
         "dluenberger": design.dluenberger(Phi, C, spec.observer_poles, form="current", dt=dt),
         "weights": {"Q": Q, "R": R, "Qd": Qd, "Rd": Rd, "Nd": Nd, "W": W, "V": V,

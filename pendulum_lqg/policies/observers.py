@@ -18,7 +18,8 @@ from scipy.linalg import expm
 
 from pendulum_lqg import design
 from pendulum_lqg.core.noise import NoiseModel
-from pendulum_lqg.model.linearize import ContinuousModel
+from pendulum_lqg.errors import ConfigError
+from pendulum_lqg.model.interface import ContinuousModel
 from pendulum_lqg.policies.estimators import (
     CurrentEstimator,
     DelayKalman,
@@ -92,8 +93,12 @@ def euler_observer(lin: ContinuousModel, noise: NoiseModel, dt: float, spec: Des
 def noise_design_matrices(plant_lin: ContinuousModel, noise: NoiseModel,
                           ) -> tuple[np.ndarray, np.ndarray]:
     """``(G, W)`` of the continuous process-noise model matching the simulator's injection."""
-    G = np.eye(4) if noise.process == "state" else plant_lin.F
-    return G, noise.W
+    if noise.process == "state":
+        return np.eye(plant_lin.A.shape[0]), noise.W
+    if plant_lin.F is None:
+        raise ConfigError("noise.process: 'force' needs a plant whose joints take the force noise "
+                          "(the MuJoCo cart-pole); this one's linear model has no F")
+    return plant_lin.F, noise.W
 
 
 def per_sample_process_covariance(plant_lin: ContinuousModel, noise: NoiseModel, dt: float,

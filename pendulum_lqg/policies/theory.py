@@ -49,7 +49,7 @@ from pendulum_lqg.policies.episode_theory import (
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.model.interface import SimulatedPlant
     from pendulum_lqg.policies.lqg import DesignSpec
 
 
@@ -187,7 +187,7 @@ def stationary(prob: StationaryProblem, *, name: str, duration: float,
                         else dict.fromkeys(by_input(r.u, prob), float("inf"))))
 
 
-def policy_theory(plant: Plant, scenario: Scenario, policy: Any, *,
+def policy_theory(plant: SimulatedPlant, scenario: Scenario, policy: Any, *,
                   plant_kind: str | None = None) -> ClosedLoopTheory:
     """The stationary closed loop of a built-in ``policy`` on ``plant``'s linearisation under
     ``scenario``'s noise (scaled by its ``noise.scale``), period and cost.
@@ -208,7 +208,7 @@ def policy_theory(plant: Plant, scenario: Scenario, policy: Any, *,
                       burn_in=scenario.burn_in)
 
 
-def linear_problem(plant: Plant, scenario: Scenario, K: np.ndarray, estimator: Any, *,
+def linear_problem(plant: SimulatedPlant, scenario: Scenario, K: np.ndarray, estimator: Any, *,
                    plant_kind: str | None = None,
                    ) -> tuple[StationaryProblem, dict[str, float]]:
     """The :class:`StationaryProblem` of gain ``K`` and ``estimator`` (a
@@ -218,8 +218,7 @@ def linear_problem(plant: Plant, scenario: Scenario, K: np.ndarray, estimator: A
     an estimator and a gain takes this path (:mod:`pendulum_lqg.scoreboard.exact`)."""
     from pendulum_lqg.core.physics.linear import LinearPhysics
     from pendulum_lqg.core.rules import limits
-    from pendulum_lqg.model.linearize import linearize
-    from pendulum_lqg.model.plant import steps_per_period
+    from pendulum_lqg.model.interface import steps_per_period
 
     kind = _plant_kind(scenario, plant_kind)
     k = steps_per_period(plant, scenario.control_period)
@@ -228,7 +227,7 @@ def linear_problem(plant: Plant, scenario: Scenario, K: np.ndarray, estimator: A
     theta_max, track, u_max = limits(plant, scenario.replace(plant=kind))
     prob = StationaryProblem(
         kind=kind, Phi=phys.Phi, Gamma=phys.Gamma[:, None], k=k, h=plant.timestep,
-        C=linearize(plant).C,                       # the sensors y = [p, θ] of the MJCF
+        C=plant.linear_model().C,                   # the sensors y = [p, θ] of the MJCF
         K=np.asarray(K, dtype=float), estimator=estimator,
         Wd=scenario.noise.W * (k * plant.timestep) * s2, V=scenario.noise.V * s2,
         Q=np.diag(scenario.cost_Q), R=np.array([[scenario.cost_R]]))
@@ -256,17 +255,16 @@ def _check_linear_scenario(scenario: Scenario) -> None:
             raise ConfigError(f"{name}: the theory covers the plain sampled loop; set {name} = 0")
 
 
-def lecture_theory(names: Sequence[str] = LECTURE_POLICIES, *, plant: Plant | None = None,
+def lecture_theory(names: Sequence[str] = LECTURE_POLICIES, *, plant: SimulatedPlant,
                    scenario: Scenario | None = None, plant_kind: str = "linear-zoh",
                    spec: DesignSpec | None = None) -> dict[str, ClosedLoopTheory]:
     """:func:`policy_theory` of each built-in policy in ``names`` (default the lecture study's,
-    :data:`~pendulum_lqg.names.LECTURE_POLICIES`) on the plant (default the shipped model) under
+    :data:`~pendulum_lqg.names.LECTURE_POLICIES`) on ``plant`` (the shipped cart-pole:
+    :func:`~pendulum_lqg.model.plant.load_plant`) under
     ``scenario`` (default the lecture's), designed with ``spec``'s weights and poles."""
     from pendulum_lqg.core.scenario import Scenario
-    from pendulum_lqg.model.plant import load_plant
     from pendulum_lqg.policies.loading import build_policy, is_plugin_ref
 
-    plant = plant if plant is not None else load_plant()
     scenario = scenario if scenario is not None else Scenario()
     out = {}
     for name in names:

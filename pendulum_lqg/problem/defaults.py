@@ -1,8 +1,8 @@
 """The defaults of an episode, written once: :class:`~pendulum_lqg.core.scenario.Scenario`'s fields
 take them, and the environments' keywords, the CLI's options and the experiment files' ``[scenario]``
 tables take theirs from here (this module imports nothing, so the CLI builds its parser without
-numpy). ``tests/problem/test_defaults.py`` holds them equal (:mod:`pendulum_lqg.core.defaults`
-re-exports them)."""
+numpy). ``tests/problem/test_defaults.py`` holds them equal to the
+declarations."""
 
 from __future__ import annotations
 

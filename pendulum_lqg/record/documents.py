@@ -29,7 +29,7 @@ def telling_episodes(rows: Sequence[Mapping[str, Any]]) -> dict[str, int]:
     Parameters
     ----------
     rows : episode records with at least ``episode``, ``success`` and ``cost``
-        (:data:`~pendulum_lqg.core.metrics.EPISODE_FIELDS`)
+        (:data:`~pendulum_lqg.bench.sources.EPISODE_FIELDS`)
 
     Returns
     -------

@@ -30,7 +30,7 @@ applied, never a ``randomize`` draw. So
 * a suite that randomises its plant (``randomize``, as ``mismatch``) is designed on **the nominal
   MJCF**: what the designer does not know is the point of the level;
 * with both, the design is on the overridden plant: a randomisation multiplies the overridden
-  values (:meth:`~pendulum_lqg.model.plant.Randomization.apply`), so the overridden plant is the
+  values (:meth:`~pendulum_lqg.model.overrides.Randomization.apply`), so the overridden plant is the
   ×1 member of the family the suite draws from, its nominal in the same sense as ``mismatch``'s
   MJCF; the overrides state the plant and the draws are the unknown. (Were the overrides unknown
   there, adding a small randomisation to a fixed suite would silently move its reference to

@@ -13,7 +13,8 @@ from pendulum_lqg import design
 from pendulum_lqg.analysis import margins as M
 from pendulum_lqg.core.noise import NoiseModel
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.model.linearize import discretize_zoh, linearize
+from pendulum_lqg.model.interface import discretize_zoh
+from pendulum_lqg.model.linearize import linearize
 from pendulum_lqg.model.plant import load_plant
 
 ROOT = Path(__file__).resolve().parents[2]

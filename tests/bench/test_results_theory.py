@@ -32,7 +32,9 @@ def test_summary_carries_the_theory_of_each_configuration(tmp_path, capsys):
     table = capsys.readouterr().out
     assert "| theory |" in table and "loop radius" in table
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
-    expected = lecture_theory(("dlqr+luenberger", "dlqr+kalman"))
+    from pendulum_lqg.model.plant import load_plant
+
+    expected = lecture_theory(("dlqr+luenberger", "dlqr+kalman"), plant=load_plant())
     for entry in summary["configurations"]:
         th, ref = entry["theory"], expected[entry["values"]["policy"]]
         assert th["plant"] == "linear-zoh" and th["stable"] is True

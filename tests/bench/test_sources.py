@@ -5,8 +5,7 @@ from __future__ import annotations
 
 from pendulum_lqg.bench.experiments import load_spec
 from pendulum_lqg.bench.results import config_fields, markdown_table, summarize_configs
-from pendulum_lqg.bench.sources import MJCF, LTISource, MJCFSource, choose_source
-from pendulum_lqg.core.metrics import EPISODE_FIELDS
+from pendulum_lqg.bench.sources import EPISODE_FIELDS, MJCF, LTISource, MJCFSource, choose_source
 from pendulum_lqg.model.interface import SimulatedPlant
 from pendulum_lqg.model.lti import LTIPlant
 from pendulum_lqg.model.plant import Plant

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 from conftest import stationary_monte_carlo
 
-from pendulum_lqg.core.layout import layout
 from pendulum_lqg.core.loop import Simulator
 from pendulum_lqg.core.metrics import summarize, summary_metrics
 from pendulum_lqg.core.physics.linear import LinearPhysics
@@ -106,7 +105,7 @@ def test_lti_metrics_are_named_after_the_file(double_integrator):
     # unnamed states: x1, x2 (as the theory names them); outputs y1
     bare = lti_from_mapping({"control_period": 0.1, "A": [[0, 1], [0, 0]], "B": [[0], [1]],
                              "C": [[1, 0]]})
-    lay = layout(bare, Scenario(control_period=0.1, plant="linear-zoh"))
+    lay = bare.layout(Scenario(control_period=0.1, plant="linear-zoh"))
     assert lay.states == ("x1", "x2") and lay.outputs == ("y1",)
 
 
@@ -118,7 +117,7 @@ def test_lti_limits_off_unless_declared_and_force_limit_from_the_file():
              "R": 1.0}
     free = lti_from_mapping(table)
     sc = Scenario(control_period=0.01, duration=20.0, plant="linear-zoh", noise=_quiet())
-    lay = layout(free, sc)
+    lay = free.layout(sc)
     assert lay.state_limits.tolist() == [INF] and lay.covariances[0].shape == (1, 1)
     zero = _ZeroForce()
     row = run_episodes(free, sc, zero, seed=0, episodes=[0]).rows[0]

@@ -8,7 +8,9 @@ from pendulum_lqg.errors import ConfigError
 
 
 def test_timing_bounds_from_the_python_api():
-    from pendulum_lqg.model.plant import ModelOverrides, load_plant, steps_per_period
+    from pendulum_lqg.model.interface import steps_per_period
+    from pendulum_lqg.model.overrides import ModelOverrides
+    from pendulum_lqg.model.plant import load_plant
     from pendulum_lqg.util.limits import (
         MAX_CONTROL_PERIOD,
         MAX_PERIODS,

@@ -23,8 +23,10 @@ from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.core.seeding import child_generator, episode_seed
 from pendulum_lqg.envs.agent import LQGAgent
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.model.linearize import discretize_zoh, linearize
-from pendulum_lqg.model.plant import ModelOverrides, load_plant
+from pendulum_lqg.model.interface import discretize_zoh
+from pendulum_lqg.model.linearize import linearize
+from pendulum_lqg.model.overrides import ModelOverrides
+from pendulum_lqg.model.plant import load_plant
 from pendulum_lqg.policies.estimators import (
     CurrentEstimator,
     DelayKalman,

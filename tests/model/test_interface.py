@@ -14,11 +14,11 @@ import scipy.linalg
 from pendulum_lqg.core.scenario import Scenario
 from pendulum_lqg.design import zoh
 from pendulum_lqg.errors import ConfigError
-from pendulum_lqg.model import interface
 from pendulum_lqg.model.interface import Layout, SimulatedPlant, steps_per_period
 from pendulum_lqg.model.linearize import linearize
 from pendulum_lqg.model.lti import load_lti
-from pendulum_lqg.model.plant import ModelOverrides, load_plant
+from pendulum_lqg.model.overrides import ModelOverrides
+from pendulum_lqg.model.plant import load_plant
 from pendulum_lqg.policies.lti import lti_scenario
 
 
@@ -44,7 +44,8 @@ def test_both_plants_are_simulated_plants():
 def test_the_cartpole_linear_model_is_the_linearisation():
     plant = load_plant()
     lin, model = linearize(plant), plant.linear_model()
-    for got, want in zip(model, (lin.A, lin.B, lin.C, lin.D), strict=True):
+    for got, want in zip((model.A, model.B, model.C, model.D, model.F),
+                         (lin.A, lin.B, lin.C, lin.D, lin.F), strict=True):
         np.testing.assert_array_equal(got, want)
     Phi, Gamma = plant.sampled(0.02)
     want_Phi, want_Gamma = zoh(lin.A, lin.B, 0.02)
@@ -59,7 +60,9 @@ def test_the_cartpole_linear_model_is_the_linearisation():
 
 def test_the_lti_plant_samples_like_scipy_expm():
     plant = load_lti("experiments/lti/two_mass.toml")
-    A, B, C, D = plant.linear_model()
+    model = plant.linear_model()
+    A, C, D = model.A, model.C, model.D
+    assert model.F is None                      # a matrix plant has no joint forces
     np.testing.assert_array_equal(A, plant.A)
     np.testing.assert_array_equal(C, plant.C)
     np.testing.assert_array_equal(D, np.zeros((plant.n_outputs, plant.n_inputs)))
@@ -113,12 +116,17 @@ def test_fingerprints_differ_between_plants_and_are_stable():
     assert moved.fingerprint() != prints[2]
 
 
-def test_steps_per_period_moved_and_kept_its_old_homes():
-    from pendulum_lqg.core import layout as core_layout
+def test_steps_per_period_is_the_interface_s_and_the_detours_are_gone():
+    import importlib.util
+
+    from pendulum_lqg.core.noise import NoiseModel
     from pendulum_lqg.model import plant as model_plant
 
-    assert model_plant.steps_per_period is interface.steps_per_period
-    assert core_layout.Layout is interface.Layout
+    assert not hasattr(model_plant, "steps_per_period")           # no re-export
+    assert not hasattr(model_plant.Plant, "get_state")
+    assert not hasattr(NoiseModel, "n_process")
+    for gone in ("pendulum_lqg.core.layout", "pendulum_lqg.core.defaults"):
+        assert importlib.util.find_spec(gone) is None, gone
     assert steps_per_period(load_plant(), 0.02) == round(0.02 / load_plant().timestep)
 
 

@@ -14,7 +14,8 @@ from pendulum_lqg.model.linearize import (
     linearize,
     steps_per_period,
 )
-from pendulum_lqg.model.plant import ModelOverrides, load_plant
+from pendulum_lqg.model.overrides import ModelOverrides
+from pendulum_lqg.model.plant import load_plant
 
 
 def _rel(a, b):

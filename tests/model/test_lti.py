@@ -131,7 +131,6 @@ def test_run_cli_on_the_double_integrator_gives_run_episodes_rows(capsys):
     (["--theta0", "0.2"], "--theta0: not with --plant"),
     (["--record", "x.rrd"], "--record: not with --plant"),
     (["--plant", "linear-euler"], "--simulator: the plant 'double_integrator' is simulated by linear-zoh"),
-    (["--policy", "plug.py:make"], "--policy: with --plant NAME|FILE, a built-in"),
     (["--dt", "0.05"], "--dt: the LTI plant 'double_integrator' is sampled at 0.01 s"),
 ])
 def test_run_cli_refuses_the_cartpoles_options_with_lti(capsys, extra, message):

@@ -227,7 +227,7 @@ def test_a_model_whose_geoms_have_other_names_works_until_an_override_needs_them
     assert main(["run", "--model", str(path), "--episodes", "3", "--duration", "1", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["success_rate"] == 1.0
     from pendulum_lqg.errors import ConfigError
-    from pendulum_lqg.model.plant import ModelOverrides
+    from pendulum_lqg.model.overrides import ModelOverrides
 
     with pytest.raises(ConfigError, match="the override pole_mass_scale needs a geom named 'pole'"):
         load_plant(path, overrides=ModelOverrides(pole_mass_scale=2.0))

@@ -25,7 +25,7 @@ they give bit-identical states. A new backend is one class in one new file imple
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -36,13 +36,13 @@ from pendulum_lqg.core.physics.mujoco_step import StepPhysics
 from pendulum_lqg.errors import ConfigError
 
 if TYPE_CHECKING:
-    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.model.interface import MujocoPlant, SimulatedPlant
 
 #: The MuJoCo backends a simulator can be asked for (``Simulator(backend=…)``).
 BACKENDS: tuple[str, ...] = ("rollout", "step")
 
 
-def make_physics(plant: Plant, *, plant_kind: str, backend: str, capacity: int, nthread: int,
+def make_physics(plant: SimulatedPlant, *, plant_kind: str, backend: str, capacity: int, nthread: int,
                  k: int) -> Physics:
     """The backend for a scenario's ``plant`` (``"mujoco"`` or a linear kind) and a MuJoCo
     ``backend``, with room for ``capacity`` rows and ``nthread`` physics threads; a kind the
@@ -52,10 +52,11 @@ def make_physics(plant: Plant, *, plant_kind: str, backend: str, capacity: int, 
                           f"got {plant_kind!r}")
     if plant_kind != "mujoco":
         return LinearPhysics(plant, plant_kind, k)
+    mj = cast("MujocoPlant", plant)            # its simulators name MuJoCo: a MuJoCo plant
     if backend == "rollout":
-        return BatchPhysics(plant, capacity, nthread, k)
+        return BatchPhysics(mj, capacity, nthread, k)
     if backend == "step":
-        return StepPhysics(plant, k)
+        return StepPhysics(mj, k)
     raise ConfigError(f"backend: expected one of {', '.join(BACKENDS)}, got {backend!r}")
 
 

@@ -13,7 +13,7 @@ from pendulum_lqg.errors import ConfigError
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.period import PeriodView
-    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.model.interface import MujocoPlant
 
 
 #: Whether a held-force period calls ``Batch.rollout``'s C++ core (``batch._b.rollout``) directly:
@@ -47,7 +47,7 @@ class BatchPhysics:
         ``False`` forces the general copy, for tests)
     """
 
-    def __init__(self, plant: Plant, capacity: int, nthread: int, k: int, *,
+    def __init__(self, plant: MujocoPlant, capacity: int, nthread: int, k: int, *,
                  aligned: bool | None = None) -> None:
         m = plant.model
         st = mujoco.mjtState

@@ -9,7 +9,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from pendulum_lqg.core.period import PeriodView
-    from pendulum_lqg.model.plant import Plant
+    from pendulum_lqg.model.interface import MujocoPlant
 
 #: MuJoCo's warnings for an unstable state (it then resets the data).
 INSTABILITY_WARNINGS = tuple(int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS,
@@ -25,7 +25,7 @@ class StepPhysics:
     a row whose simulation becomes unstable stops and holds the state reached, as the batch does.
     """
 
-    def __init__(self, plant: Plant, k: int) -> None:
+    def __init__(self, plant: MujocoPlant, k: int) -> None:
         self.plant, self.k = plant, k
         self.data = mujoco.MjData(plant.model)
         self.models: list[mujoco.MjModel] | None = None
