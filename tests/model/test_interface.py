@@ -61,7 +61,7 @@ def test_the_cartpole_linear_model_is_the_linearisation():
 def test_the_lti_plant_samples_like_scipy_expm():
     plant = load_lti("experiments/lti/two_mass.toml")
     model = plant.linear_model()
-    A, C, D = model.A, model.C, model.D
+    A, B, C, D = model.A, model.B, model.C, model.D
     assert model.F is None                      # a matrix plant has no joint forces
     np.testing.assert_array_equal(A, plant.A)
     np.testing.assert_array_equal(C, plant.C)
