@@ -311,9 +311,11 @@ def _steps_before(where: Where, data: Any, key: str, total: int) -> int:
 
 
 def ars_checkpoint(path: str | os.PathLike[str], *, where_text: str, settings: dict[str, Any],
-                   suite: str, curve: list[dict[str, Any]] | None) -> dict[str, Any]:
+                   suite: str, curve: list[dict[str, Any]] | None,
+                   inputs: int = LINEAR_INPUTS) -> dict[str, Any]:
     """An ARS run's checkpoint (:mod:`pendulum_lqg.learn.ars`), checked against the run resumed:
-    its ``settings`` and ``suite`` fingerprint the run's, every array of the policy's size."""
+    its ``settings`` and ``suite`` fingerprint the run's, every array of the policy's size
+    (``inputs`` per frame: the plant's outputs + 1)."""
     data = read_json(path, where=where_text)
     where = Where(f"{where_text}: {path}")
     data = where.check(data, table)
@@ -326,7 +328,7 @@ def ars_checkpoint(path: str | os.PathLike[str], *, where_text: str, settings: d
     points = _curve_points(where, data, curve)
     at = where.at("state")
     state = at.check(where.get(data, "state", table), table)
-    size = 3 * int(settings["frames"])
+    size = inputs * int(settings["frames"])
     out = {"M": at.get(state, "M", list_of(number(), size)),
            "n": at.get(state, "n", _COUNT),
            "mean": at.get(state, "mean", list_of(number(), size)),

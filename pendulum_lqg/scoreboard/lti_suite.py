@@ -83,6 +83,8 @@ class LTISuite:
     scenario: dict[str, Any] = field(default_factory=dict)
     origin: str = ""
     designed_on: str = DESIGNED_ON_LTI
+    #: the plant as ``--plant`` named it (a shipped NAME stays a name in the env's keywords)
+    plant_ref: str = ""
 
     def plant(self) -> Any:
         """The suite's plant (:func:`~pendulum_lqg.model.catalog.load_plant_at`: matrices or a
@@ -116,7 +118,7 @@ class LTISuite:
     def env(self) -> dict[str, Any]:
         """The environments' keywords of the suite's plant (``plant``: its file) and scenario:
         what ``train --plant`` trains on."""
-        return {"plant": str(self.lti_file),
+        return {"plant": self.plant_ref or str(self.lti_file),
                 **{k: v for k, v in self.scenario.items() if k in _ENV_KEYS}}
 
     def errors_named(self, what: str, exc: Any) -> Any:
@@ -158,7 +160,7 @@ def plant_suite(ref: str | Path, *, what: str = "--plant") -> LTISuite:
     plant = load_plant_at(path)                # the file checked: one line naming it and the key
     name = plant.name.replace("_", "-")
     return LTISuite(name=name, purpose=f"the plant {name}'s own suite ({path.name})",
-                    lti_file=path, origin=str(ref), **PLANT_SUITE)
+                    lti_file=path, origin=str(ref), plant_ref=str(ref), **PLANT_SUITE)
 
 
 def names_an_lti_plant(name_or_path: str) -> bool:
