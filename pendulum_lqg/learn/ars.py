@@ -5,13 +5,13 @@ ARS V2-t (Mania, Guy & Recht 2018): a linear policy ``u = s · M (h − μ)/σ``
 limit) of the history ``h`` of the last ``K`` inputs ``z = [p, θ, u_{k−1}/s]`` (3K numbers; the
 file form of :mod:`pendulum_lqg.scoreboard.linear`). On a plant of ``p`` outputs and one input
 (``train --plant``) ``z = [y, u_{k−1}/s]`` and ``h`` has ``(p + 1)·K`` numbers
-(:func:`history_inputs`: read from the suite's plant, never written here). Each iteration draws ``N`` directions
-``δ_j ~ N(0, I)`` and plays ``M ± ν δ_j`` as the ``2N`` rows of one native vector env, direction
-``j``'s two rows on the same episode (common random numbers: the ± difference sees the same
-noise); the return is the sum of the env's reward (v0, the deep-RL baselines' reward). The ``b``
-best directions (by ``max(r₊, r₋)``) update ``M ← M + α/(b σ_R) Σ (r₊ − r₋) δ`` (``σ_R`` the std
-of their ``2b`` returns), and ``μ, σ`` are the running mean and std of every history the rollouts
-saw (V2: observation normalisation).
+(:func:`history_inputs`: read from the suite's plant, never written here). Each iteration draws
+``N`` directions ``δ_j ~ N(0, I)`` and plays ``M ± ν δ_j`` as the ``2N`` rows of one native vector
+env, direction ``j``'s two rows on the same episode (common random numbers: the ± difference sees
+the same noise); the return is the sum of the env's reward (v0, the deep-RL baselines' reward). The
+``b`` best directions (by ``max(r₊, r₋)``) update ``M ← M + α/(b σ_R) Σ (r₊ − r₋) δ`` (``σ_R`` the
+std of their ``2b`` returns), and ``μ, σ`` are the running mean and std of every history the
+rollouts saw (V2: observation normalisation).
 
 Why ``K = 64``: the LQG compensator is a linear policy of a short history, but that form is so
 ill-conditioned that a relative perturbation of 1e-4 of its weights loses every episode, while

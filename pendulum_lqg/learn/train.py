@@ -178,9 +178,8 @@ def prepare(method: str, *, seed: Any, suite: str | None = None, steps: Any = No
             log: Callable[[str], None] | None = None,
             plant: str | Path | None = None) -> RunContext:
     """The run's context, every input checked (nothing trained, nothing written)."""
-    from pendulum_lqg.model.catalog import is_cartpole
-
     from pendulum_lqg.learn.deep import method_name
+    from pendulum_lqg.model.catalog import is_cartpole
 
     info = METHODS.get(method)
     if info is None:
