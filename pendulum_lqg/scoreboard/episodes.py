@@ -65,9 +65,9 @@ def policy_rows(suite: Suite, policy: str, *, base_dir: Path | None = None,
 
 
 def _plant_suite(suite: Any) -> bool:
-    from pendulum_lqg.scoreboard.lti_suite import LTISuite
-
-    return isinstance(suite, LTISuite)
+    """``suite`` is a plant's suite (an :class:`~pendulum_lqg.scoreboard.lti_suite.LTISuite`, which
+    names its plant file; not imported here: that module imports this one through the score)."""
+    return getattr(suite, "lti_file", None) is not None
 
 
 def full_state_rows(suite: Suite, *, nthread: int | None = None) -> list[dict[str, Any]]:
