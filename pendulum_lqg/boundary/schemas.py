@@ -140,7 +140,9 @@ def training_record(path: str | os.PathLike[str], *, where_text: str) -> dict[st
 LINEAR_FORMAT, LINEAR_VERSION = "pendulum-lqg linear controller", 1
 #: Ceiling of a linear controller's state dimension (a matrix of that many rows is kept per row).
 MAX_LINEAR_STATES = 1_000
-#: Inputs of a linear controller per control period: ``z = [p, θ, u_prev / action_scale]``.
+#: Inputs of a linear controller per control period on the cart-pole: ``z = [p, θ, u_prev /
+#: action_scale]``; on a plant of p outputs (``--plant``) ``z = [y (p), u_prev / action_scale]``,
+#: p + 1 numbers (:func:`linear_inputs`).
 LINEAR_INPUTS = 3
 
 
@@ -155,8 +157,12 @@ def _history_form(where: Where, data: Any) -> dict[str, Any]:
     if frames > MAX_FRAME_STACK:
         raise where.error(f"at most {MAX_FRAME_STACK:,} (frames the controller keeps), got "
                           f"{frames:,}", "frames")
-    size = LINEAR_INPUTS * frames
-    return {"frames": frames, "weights": where.get(data, "weights", list_of(number(), size)),
+    weights = where.get(data, "weights", list_of(number()))
+    size = len(weights)
+    if size % frames or size // frames < 2:
+        raise where.error(f"expected frames × (outputs + 1) numbers, {frames} × q with q ≥ 2 "
+                          f"(z = [y, u_prev/s] per frame), got {size}", "weights")
+    return {"frames": frames, "weights": weights,
             "bias": where.get(data, "bias", number(), default=0.0),
             "mean": where.get(data, "mean", list_of(number(), size)),
             "std": where.get(data, "std", list_of(number(low=1e-12), size))}
@@ -168,10 +174,23 @@ def _state_space_form(where: Where, data: Any) -> dict[str, Any]:
     n = len(A)
     if not 1 <= n <= MAX_LINEAR_STATES:
         raise where.error(f"expected 1 … {MAX_LINEAR_STATES:,} states, got {n}", "A")
+    B = where.get(data, "B", _matrix(n, None))
+    q = len(B[0])
+    if q < 2:
+        raise where.error(f"expected n × q with q ≥ 2 columns (z = [y, u_prev/s]), got {q}", "B")
     return {"A": where.get(data, "A", _matrix(n, n)),
-            "B": where.get(data, "B", _matrix(n, LINEAR_INPUTS)),
+            "B": where.get(data, "B", _matrix(n, q)),
             "C": where.get(data, "C", _matrix(1, n)),
-            "D": where.get(data, "D", _matrix(1, LINEAR_INPUTS))}
+            "D": where.get(data, "D", _matrix(1, q))}
+
+
+def linear_inputs(doc: dict[str, Any]) -> int:
+    """The inputs per control period ``q`` of a checked linear controller document: ``z = [y,
+    u_prev/s]``, so the controller takes ``q − 1`` outputs (3 on the cart-pole's ``[p, θ]``)."""
+    if doc["form"] == "history":
+        h = doc["history"]
+        return len(h["weights"]) // int(h["frames"])
+    return len(doc["state_space"]["D"][0])
 
 
 def linear_controller(path: str | os.PathLike[str], *, where_text: str) -> dict[str, Any]:
@@ -292,9 +311,11 @@ def _steps_before(where: Where, data: Any, key: str, total: int) -> int:
 
 
 def ars_checkpoint(path: str | os.PathLike[str], *, where_text: str, settings: dict[str, Any],
-                   suite: str, curve: list[dict[str, Any]] | None) -> dict[str, Any]:
+                   suite: str, curve: list[dict[str, Any]] | None,
+                   inputs: int = LINEAR_INPUTS) -> dict[str, Any]:
     """An ARS run's checkpoint (:mod:`pendulum_lqg.learn.ars`), checked against the run resumed:
-    its ``settings`` and ``suite`` fingerprint the run's, every array of the policy's size."""
+    its ``settings`` and ``suite`` fingerprint the run's, every array of the policy's size
+    (``inputs`` per frame: the plant's outputs + 1)."""
     data = read_json(path, where=where_text)
     where = Where(f"{where_text}: {path}")
     data = where.check(data, table)
@@ -307,7 +328,7 @@ def ars_checkpoint(path: str | os.PathLike[str], *, where_text: str, settings: d
     points = _curve_points(where, data, curve)
     at = where.at("state")
     state = at.check(where.get(data, "state", table), table)
-    size = 3 * int(settings["frames"])
+    size = inputs * int(settings["frames"])
     out = {"M": at.get(state, "M", list_of(number(), size)),
            "n": at.get(state, "n", _COUNT),
            "mean": at.get(state, "mean", list_of(number(), size)),
@@ -517,6 +538,7 @@ __all__ = [
     "ars_checkpoint",
     "curve_file",
     "linear_controller",
+    "linear_inputs",
     "openloop_checkpoint",
     "sb3_checkpoint",
     "score_file",

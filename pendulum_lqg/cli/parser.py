@@ -322,6 +322,9 @@ def resolve_plant_option(args: argparse.Namespace) -> None:
     if ref is None and getattr(args, "lti", None) is None:
         return
     if ref in PLANTS:
+        if args.command in ("score", "train"):         # they play each plant's own simulator
+            raise cfg_error(f"--plant: expected a plant name or a plant file, got the simulator "
+                            f"word {ref!r} ({args.command} plays each plant's own simulator)")
         if ref not in ("linear-zoh", "linear-euler") and args.command == "theory":
             raise cfg_error(f"--plant: the theory's simulator is linear-zoh or linear-euler, "
                             f"got {ref!r}")

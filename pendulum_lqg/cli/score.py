@@ -30,7 +30,12 @@ def add_parsers(sub: Any) -> None:
     p.add_argument("--suite", action="append", default=None, metavar="NAME",
                    help="suite name or file (repeatable), or 'all' (the default): "
                         "full-state, lecture, mismatch, delayed, lossy, noisy, hard; a file "
-                        "naming an lti_file is a suite of that plant (built-in policies only)")
+                        "naming an lti_file is a suite of that plant (built-in policies and "
+                        "linear:FILE only)")
+    add_plant_option(p, "score on the plant's own suite: its plant file's scenario, 100 "
+                        "episodes of 10 s seeded 2026, the reference dlqr+kalman designed on it "
+                        "(built-in policies and --agent linear:FILE; not with --suite). "
+                        "cartpole: the shipped suites, as without --plant")
     p.add_argument("--episodes", type=Kind("PositiveInt"), default=None, metavar="N",
                    help="episodes per suite (default: the suite's own, 100; fewer is a quick "
                         "score whose fingerprint differs from the full one)")
@@ -57,6 +62,15 @@ def add_parsers(sub: Any) -> None:
                    help="write the table to FILE too (a new path or a regular file)")
 
 
+def add_plant_option(p: argparse.ArgumentParser, what: str) -> None:
+    """``--plant NAME|FILE`` of ``score`` and ``train`` (``args.plant_ref``; checked by
+    :func:`~pendulum_lqg.cli.parser.resolve_plant_option` as every front end's)."""
+    p.add_argument("--plant", dest="plant_ref", default=None, metavar="NAME|FILE",
+                   help="the plant: a shipped one (cartpole, double-cartpole, …; see "
+                        "docs/family.md) or a plant file (TOML: an MJCF model's, or a plant "
+                        f"given as matrices; .npz) (default: the cart-pole): {what}")
+
+
 def add_call_timeout(p: argparse.ArgumentParser) -> None:
     """``--call-timeout S``: the watchdog of user code (:mod:`pendulum_lqg.util.watchdog`)."""
     from pendulum_lqg.cli.options import Kind
@@ -76,17 +90,21 @@ def cmd_score(args: argparse.Namespace) -> int:
     from pendulum_lqg.util.watchdog import call_timeout
 
     out = None if args.out is None else output_file("--out", args.out, what="score (JSON)")
+    plant = _plant_suites(args)
     wanted = args.suite or ["all"]
-    names = suite_names() if "all" in wanted else wanted
+    names = [] if plant else suite_names() if "all" in wanted else wanted
     lti = [n for n in names if names_an_lti_plant(n)]    # a plant given as matrices
+    if lti and args.plant_ref is not None:
+        raise cfg_error(f"--plant: {args.plant_ref!r} plays the shipped cart-pole suites; --suite "
+                        f"{lti[0]} is a suite of another plant: give one")
     suites = [load_suite(n).with_episodes(args.episodes) for n in names if n not in lti]
     with call_timeout(args.call_timeout), Progress("score", len(suites), unit="suites") as bar:
         doc = score_entry(suites, policy=args.policy, agent=args.agent,
                           normalize_action=args.normalize_action, nthread=args.nthread,
                           base_dir=Path.cwd(), noise_scale=args.noise_scale,
                           on_suite=lambda name: bar.advance(description=f"scored {name}"))
-    if lti:
-        doc["suites"].update(_lti_entries(args, lti))
+    if lti or plant:
+        doc["suites"].update(_lti_entries(args, lti, plant))
     text = json.dumps(doc, indent=1, allow_nan=False)
     if out is not None:
         atomic_write(out, text + "\n")
@@ -97,13 +115,36 @@ def cmd_score(args: argparse.Namespace) -> int:
     return 0
 
 
-def _lti_entries(args: argparse.Namespace, files: list[str]) -> dict[str, Any]:
-    """The entries of the LTI suites among ``--suite`` (:mod:`pendulum_lqg.scoreboard.lti_suite`)."""
+def _plant_suites(args: argparse.Namespace) -> list[Any]:
+    """``--plant NAME|FILE``'s own suite (:func:`~pendulum_lqg.scoreboard.lti_suite.plant_suite`),
+    none for the cart-pole (its suites are the shipped ones); refused with ``--suite``, which
+    names other suites."""
+    from pendulum_lqg.model.catalog import is_cartpole
+    from pendulum_lqg.scoreboard.lti_suite import plant_suite
+
+    if is_cartpole(args.plant_ref):
+        return []
+    if args.suite:
+        raise cfg_error(f"--plant: {args.plant_ref!r} is scored on its own suite; --suite "
+                        f"{args.suite[0]} names another: give one")
+    return [plant_suite(args.plant_ref)]
+
+
+def _lti_entries(args: argparse.Namespace, files: list[str],
+                 plant: list[Any]) -> dict[str, Any]:
+    """The entries of the LTI suites among ``--suite`` and of ``--plant``'s suite
+    (:mod:`pendulum_lqg.scoreboard.lti_suite`)."""
     from pendulum_lqg.scoreboard.lti_suite import load_lti_suite, lti_suite_entries
 
-    return lti_suite_entries([load_lti_suite(f) for f in files], policy=args.policy,
+    return lti_suite_entries([*(load_lti_suite(f) for f in files), *plant], policy=args.policy,
                              agent=args.agent, episodes=args.episodes,
-                             noise_scale=args.noise_scale)
+                             noise_scale=args.noise_scale, nthread=args.nthread)
+
+
+def cfg_error(msg: str) -> Exception:
+    from pendulum_lqg.errors import ConfigError
+
+    return ConfigError(msg)
 
 
 def _print_score(doc: dict[str, Any]) -> None:

@@ -31,6 +31,11 @@ def add_train_parser(sub: Any) -> None:
     p.add_argument("--suite", default=None, metavar="NAME|FILE",
                    help="the suite whose env the run trains on (default: the method's, lecture "
                         "or full-state)")
+    from pendulum_lqg.cli.score import add_plant_option
+
+    add_plant_option(p, "train on the env of the plant's own suite, the one score --plant "
+                        "scores on (ars-history, ars-history-clone; the others are refused, "
+                        "naming why; not with --suite)")
     p.add_argument("--steps", default=None, metavar="N",
                    help="env steps of the run (ls-clone: closed-loop samples of the fit; "
                         "sysid-lqg: the identification's budget; default: the method's)")
@@ -72,7 +77,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     options = {k: getattr(args, k) for k in ("eval_every", "noise_scale", "frames", "alpha", "nu",
                                              "init")}
     ctx = prepare(args.method, seed=args.seed, suite=args.suite, steps=args.steps, out=args.out,
-                  force=args.force, resume=args.resume, options=options)
+                  force=args.force, resume=args.resume, options=options, plant=args.plant_ref)
     try:
         wrote = run(ctx)
     except Stopped as stop:
@@ -88,8 +93,9 @@ def _resume_command(args: argparse.Namespace, out: Any) -> str:
     import shlex
 
     parts = ["pendulum-lqg", "train", args.method, "--seed", str(args.seed)]
-    for flag in ("suite", "steps", "eval_every", "noise_scale", "frames", "alpha", "nu", "init"):
+    for flag in ("plant_ref", "suite", "steps", "eval_every", "noise_scale", "frames", "alpha",
+                 "nu", "init"):
         value = getattr(args, flag)
         if value is not None:
-            parts += [f"--{flag.replace('_', '-')}", str(value)]
+            parts += [f"--{flag.removesuffix('_ref').replace('_', '-')}", str(value)]
     return " ".join(shlex.quote(p) for p in [*parts, "--out", str(out), "--resume"])

@@ -3,13 +3,15 @@
 
 ARS V2-t (Mania, Guy & Recht 2018): a linear policy ``u = s · M (h − μ)/σ`` (``s`` the actuator
 limit) of the history ``h`` of the last ``K`` inputs ``z = [p, θ, u_{k−1}/s]`` (3K numbers; the
-file form of :mod:`pendulum_lqg.scoreboard.linear`). Each iteration draws ``N`` directions
-``δ_j ~ N(0, I)`` and plays ``M ± ν δ_j`` as the ``2N`` rows of one native vector env, direction
-``j``'s two rows on the same episode (common random numbers: the ± difference sees the same
-noise); the return is the sum of the env's reward (v0, the deep-RL baselines' reward). The ``b``
-best directions (by ``max(r₊, r₋)``) update ``M ← M + α/(b σ_R) Σ (r₊ − r₋) δ`` (``σ_R`` the std
-of their ``2b`` returns), and ``μ, σ`` are the running mean and std of every history the rollouts
-saw (V2: observation normalisation).
+file form of :mod:`pendulum_lqg.scoreboard.linear`). On a plant of ``p`` outputs and one input
+(``train --plant``) ``z = [y, u_{k−1}/s]`` and ``h`` has ``(p + 1)·K`` numbers
+(:func:`history_inputs`: read from the suite's plant, never written here). Each iteration draws
+``N`` directions ``δ_j ~ N(0, I)`` and plays ``M ± ν δ_j`` as the ``2N`` rows of one native vector
+env, direction ``j``'s two rows on the same episode (common random numbers: the ± difference sees
+the same noise); the return is the sum of the env's reward (v0, the deep-RL baselines' reward). The
+``b`` best directions (by ``max(r₊, r₋)``) update ``M ← M + α/(b σ_R) Σ (r₊ − r₋) δ`` (``σ_R`` the
+std of their ``2b`` returns), and ``μ, σ`` are the running mean and std of every history the
+rollouts saw (V2: observation normalisation).
 
 Why ``K = 64``: the LQG compensator is a linear policy of a short history, but that form is so
 ill-conditioned that a relative perturbation of 1e-4 of its weights loses every episode, while
@@ -119,8 +121,9 @@ class ARSState:
     """Everything an ARS run needs to continue: ``M``, the statistics, the direction generator's
     state, the counters and the training log since the last curve point."""
 
-    def __init__(self, s: ARSSettings, seed: int, start: dict[str, Any] | None) -> None:
-        size = 3 * s.frames
+    def __init__(self, s: ARSSettings, seed: int, start: dict[str, Any] | None,
+                 inputs: int = 3) -> None:
+        size = inputs * s.frames
         self.M, self.stats = np.zeros(size), RunningStats(size)
         self.start, self.bias = "zero", 0.0
         if start is not None:
@@ -177,10 +180,17 @@ def settings_of(ctx: RunContext) -> ARSSettings:
     return replace(base, **chosen)
 
 
-def load_start(path: Path, frames: int) -> dict[str, Any]:
-    """The clone a run starts from: a history controller file of ``frames`` frames."""
+def history_inputs(suite: Any) -> int:
+    """The inputs per frame ``z = [y, u_{k−1}/s]`` on ``suite``'s plant: its outputs + 1 (3 on
+    the cart-pole)."""
+    return int(suite.plants()[1].layout(suite.config.scenario).p) + 1
+
+
+def load_start(path: Path, frames: int, inputs: int = 3) -> dict[str, Any]:
+    """The clone a run starts from: a history controller file of ``frames`` frames of
+    ``inputs`` numbers each."""
     from pendulum_lqg.boundary.fields import Where, integer, table
-    from pendulum_lqg.boundary.schemas import linear_controller
+    from pendulum_lqg.boundary.schemas import linear_controller, linear_inputs
 
     doc = linear_controller(path, where_text="--init")
     if doc["form"] != "history" or doc["history"]["frames"] != frames:
@@ -188,6 +198,9 @@ def load_start(path: Path, frames: int) -> dict[str, Any]:
                           "(pendulum-lqg train ls-clone), got "
                           f"{doc['form']} form" + (f" of {doc['history']['frames']} frames"
                                                    if doc["form"] == "history" else ""))
+    if linear_inputs(doc) != inputs:
+        raise ConfigError(f"--init: {path}: expected {inputs} inputs per frame (the plant's "
+                          f"{inputs - 1} outputs and u), got {linear_inputs(doc)}")
     h = doc["history"]
     where = Where(f"--init: {path}", ("training",))
     training = where.check(doc.get("training") or {}, table)
@@ -210,9 +223,11 @@ def train_ars(ctx: RunContext) -> list[Path]:
         if not ctx.options.get("init"):
             raise ConfigError("--init: ars-history-clone starts from a clone: give --init FILE "
                               "(a controller written by pendulum-lqg train ls-clone)")
-        start = ctx.options.get("start") or load_start(Path(ctx.options["init"]), s.frames)
+        start = ctx.options.get("start") or load_start(Path(ctx.options["init"]), s.frames,
+                                                       history_inputs(ctx.suite))
     scale = float(limits(ctx.suite.plants()[1], ctx.suite.config.scenario)[2])
-    state = ARSState(s, ctx.seed, start)
+    inputs = history_inputs(ctx.suite)
+    state = ARSState(s, ctx.seed, start, inputs)
     points = None
     if ctx.resume:
         saved = ctx.resumed()       # checked at the boundary before any work
@@ -223,7 +238,7 @@ def train_ars(ctx: RunContext) -> list[Path]:
         curve.add_linear(0, _document(ctx, s, state, curve, scale, start))
     env = CartPoleLQGVectorEnv(2 * s.directions, nthread=1, **ctx.suite.env)
     try:
-        _iterate(ctx, s, state, env, curve, scale, start)
+        _iterate(ctx, s, state, env, curve, scale, start, inputs)
     finally:
         env.close()
     write_json(ctx.path(".json"), _document(ctx, s, state, curve, scale, start))
@@ -232,13 +247,13 @@ def train_ars(ctx: RunContext) -> list[Path]:
 
 
 def _iterate(ctx: RunContext, s: ARSSettings, state: ARSState, env: Any, curve: Any,
-             scale: float, start: dict[str, Any] | None) -> None:
+             scale: float, start: dict[str, Any] | None, inputs: int = 3) -> None:
     """ARS iterations until ``s.steps``; a curve point and a checkpoint every ``ctx.eval_every``
     steps; a Ctrl-C stops after the iteration it interrupted, with a checkpoint."""
     from pendulum_lqg.core.seeding import episode_seeds
     from pendulum_lqg.scoreboard.linear import HistoryPolicy
 
-    size = 3 * s.frames
+    size = inputs * s.frames
     with ctx.stop.installed():
         while state.steps < s.steps:
             if ctx.stop.requested:
@@ -248,7 +263,7 @@ def _iterate(ctx: RunContext, s: ARSSettings, state: ARSState, env: Any, curve: 
             weights = np.vstack([state.M + s.nu * deltas, state.M - s.nu * deltas])
             mean0, std0 = state.stats.mean.copy(), state.stats.std()
             policy = HistoryPolicy(weights, mean0, std0, frames=s.frames, action_scale=scale,
-                                   u_max=scale, bias=state.bias)
+                                   u_max=scale, bias=state.bias, outputs=inputs - 1)
             pair = episode_seeds(run_root(ctx.seed),
                                  range(state.episodes, state.episodes + s.directions))
             returns, lengths = ars_rollouts(env, policy, pair + pair, state.stats)

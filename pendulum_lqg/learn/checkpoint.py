@@ -33,10 +33,10 @@ def read_checkpoint(ctx: RunContext) -> dict[str, Any]:
     if kind == "ars":
         from dataclasses import asdict
 
-        from pendulum_lqg.learn.ars import settings_of
+        from pendulum_lqg.learn.ars import history_inputs, settings_of
 
         saved = ars_checkpoint(path, where_text=where, settings=asdict(settings_of(ctx)),
-                               suite=fingerprint, curve=curve)
+                               suite=fingerprint, curve=curve, inputs=history_inputs(ctx.suite))
     elif kind == "sysid-openloop":
         from pendulum_lqg.learn.openloop import budgets_for
 

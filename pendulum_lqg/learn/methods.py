@@ -33,6 +33,24 @@ class MethodInfo:
     def extra(self) -> str | None:
         return "rl" if self.kind == "sb3" else None
 
+    @property
+    def plant_refusal(self) -> str | None:
+        """Why the method does not train on a plant other than the cart-pole (``train --plant``),
+        or ``None``: it reads the plant's sizes from the env (:data:`PLANT_REFUSALS`)."""
+        return PLANT_REFUSALS.get(self.kind)
+
+
+#: Why a kind of method trains on the cart-pole only (``train --plant``; every other kind, ARS,
+#: reads the plant's n, p and m from its env: any plant of one input, the env's rule).
+PLANT_REFUSALS = {
+    "sb3": "its model is scored on the cart-pole's suites only (score --plant scores built-in "
+           "policies and linear:FILE controllers)",
+    "clone": "its teacher is sysid-lqg's model, the cart-pole's structured 4-state, "
+             "2-output model",
+    "sysid-lqg": "it identifies the cart-pole's structured 4-state model of y = [p, θ]",
+    "sysid-openloop": "it identifies the cart-pole's structured 4-state model of y = [p, θ]",
+}
+
 
 _LINEAR = {
     "ars-history": MethodInfo("ars-history", "ARS V2-t from zero: a linear policy of the last 64 "
@@ -59,10 +77,13 @@ METHODS: dict[str, MethodInfo] = {
 
 
 def list_lines() -> list[str]:
-    """One line per method: name, default suite, default env steps, the extra, what it is."""
+    """One line per method: name, default suite, default env steps, the extra, what it is; then
+    the methods that train on any plant (``--plant``)."""
     out = []
     for name, m in METHODS.items():
         steps = f"{'≤ ' if m.kind == 'sysid-lqg' else ''}{m.steps:,} steps"
         extra = f"[{m.extra}]" if m.extra else "-"
         out.append(f"{name:22s} {m.suite:11s} {steps:>15s}  {extra:5s} {m.what}")
+    anywhere = [name for name, m in METHODS.items() if m.plant_refusal is None]
+    out.append(f"--plant NAME|FILE (any plant of one input): {', '.join(anywhere)}")
     return out

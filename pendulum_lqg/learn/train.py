@@ -138,21 +138,48 @@ def check_extra(info: MethodInfo) -> None:
 def train(method: str, *, seed: Any, suite: str | None = None, steps: Any = None,
           out: str | Path | None = None, force: bool = False, resume: bool = False,
           options: dict[str, Any] | None = None,
-          log: Callable[[str], None] | None = None) -> tuple[RunContext, list[Path]]:
+          log: Callable[[str], None] | None = None,
+          plant: str | Path | None = None) -> tuple[RunContext, list[Path]]:
     """Check everything, then train run ``seed`` of ``method``; the run's context and the files
     written. ``options``: ``frames``, ``alpha``, ``nu``, ``eval_every``, ``noise_scale``,
-    ``init`` (those the method takes; :data:`~pendulum_lqg.learn.methods.METHODS`)."""
+    ``init`` (those the method takes; :data:`~pendulum_lqg.learn.methods.METHODS`); ``plant``:
+    a plant NAME or FILE to train on (its own suite, :func:`plant_training_suite`)."""
     ctx = prepare(method, seed=seed, suite=suite, steps=steps, out=out, force=force,
-                  resume=resume, options=options, log=log)
+                  resume=resume, options=options, log=log, plant=plant)
     return ctx, run(ctx)
+
+
+def plant_training_suite(info: MethodInfo, plant: str | Path, suite: str | None) -> Any:
+    """The suite a run of ``info`` on ``plant`` trains on: the plant's own suite
+    (:func:`~pendulum_lqg.scoreboard.lti_suite.plant_suite`, the one ``score --plant`` scores
+    on), its env checked; one line ``--plant: …`` where the method or the plant cannot."""
+    from pendulum_lqg.envs.config import EnvConfig
+    from pendulum_lqg.errors import PendulumLQGError
+    from pendulum_lqg.scoreboard.lti_suite import plant_suite
+
+    if suite is not None:
+        raise ConfigError(f"--plant: {str(plant)!r} trains on its own suite; --suite {suite} "
+                          "names another: give one")
+    if info.plant_refusal is not None:
+        raise ConfigError(f"--plant: {info.name} trains on the cart-pole only: "
+                          f"{info.plant_refusal}")
+    loaded = plant_suite(plant)
+    try:
+        EnvConfig.from_keywords(loaded.env)           # the env of one input, the env's rule
+    except PendulumLQGError as exc:
+        said = str(exc).removeprefix("plant: ")
+        raise ConfigError(f"--plant: {info.name} trains on the env: {said}") from None
+    return loaded
 
 
 def prepare(method: str, *, seed: Any, suite: str | None = None, steps: Any = None,
             out: str | Path | None = None, force: bool = False, resume: bool = False,
             options: dict[str, Any] | None = None,
-            log: Callable[[str], None] | None = None) -> RunContext:
+            log: Callable[[str], None] | None = None,
+            plant: str | Path | None = None) -> RunContext:
     """The run's context, every input checked (nothing trained, nothing written)."""
     from pendulum_lqg.learn.deep import method_name
+    from pendulum_lqg.model.catalog import is_cartpole
 
     info = METHODS.get(method)
     if info is None:
@@ -166,12 +193,16 @@ def prepare(method: str, *, seed: Any, suite: str | None = None, steps: Any = No
     if resume and out is None:
         raise ConfigError("--resume: needs the --out DIR of the run to continue")
     folder = out_folder(out) if out is not None else None
-    check_extra(info)
-    loaded = _training_suite(suite or info.suite, opts.get("noise_scale"))
+    if is_cartpole(plant):
+        check_extra(info)
+        loaded = _training_suite(suite or info.suite, opts.get("noise_scale"))
+    else:
+        loaded = plant_training_suite(info, str(plant), suite)
     if "init" in opts:                     # the clone ARS starts from, read at the boundary now
-        from pendulum_lqg.learn.ars import ARSSettings, load_start
+        from pendulum_lqg.learn.ars import ARSSettings, history_inputs, load_start
 
-        opts["start"] = load_start(opts["init"], opts.get("frames") or ARSSettings().frames)
+        opts["start"] = load_start(opts["init"], opts.get("frames") or ARSSettings().frames,
+                                   history_inputs(loaded))
     name = method_name(method, opts.get("noise_scale"))
     folder = folder or default_out(name, seed)
     held = check_out_folder(folder, f"{name}-seed{seed}", force=force, resume=resume,

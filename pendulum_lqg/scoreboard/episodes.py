@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Protocol, cast
 
 import gymnasium as gym
 import numpy as np
@@ -56,13 +56,25 @@ def policy_rows(suite: Suite, policy: str, *, base_dir: Path | None = None,
 
     What the policy observes is the suite's: in a ``full-state`` suite it must declare
     ``needs_state = True`` (a built-in ``controller+none``), elsewhere it must not (it would see
-    the true state the suite hides)."""
+    the true state the suite hides). On a plant's suite
+    (:class:`~pendulum_lqg.scoreboard.lti_suite.LTISuite`) a built-in designed on its plant
+    (:meth:`~pendulum_lqg.scoreboard.lti_suite.LTISuite.rows`)."""
+    if _plant_suite(suite):
+        return cast(Any, suite).rows(policy)
     return _batch_rows(suite, policy, base_dir=base_dir, nthread=nthread, check=True)
+
+
+def _plant_suite(suite: Any) -> bool:
+    """``suite`` is a plant's suite (an :class:`~pendulum_lqg.scoreboard.lti_suite.LTISuite`, which
+    names its plant file; not imported here: that module imports this one through the score)."""
+    return getattr(suite, "lti_file", None) is not None
 
 
 def full_state_rows(suite: Suite, *, nthread: int | None = None) -> list[dict[str, Any]]:
     """The rows of the full-state LQR (``dlqr+none``: the true state, no estimator) in the suite's
     scenario — the bound of what observation costs, also where the suite observes only ``y``."""
+    if _plant_suite(suite):
+        return cast(Any, suite).rows("dlqr+none")
     return _batch_rows(suite, "dlqr+none", base_dir=None, nthread=nthread, check=False)
 
 

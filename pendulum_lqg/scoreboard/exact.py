@@ -88,22 +88,25 @@ class ExactCost:
 
 
 def _matrices(doc: dict[str, Any]) -> tuple[Any, ...]:
-    """``(A_c, B_c, C_c (r,), D_c (3,), c, s)`` of a checked controller document."""
-    s = float(doc["action_scale"])
+    """``(A_c, B_c, C_c (r,), D_c (q,), c, s)`` of a checked controller document (``q``: the
+    inputs ``z = [y, u_prev/s]`` per period, 3 on the cart-pole)."""
+    from pendulum_lqg.boundary.schemas import linear_inputs
+
+    s, q = float(doc["action_scale"]), linear_inputs(doc)
     if doc["form"] == "state_space":
         m = doc["state_space"]
         A, B = np.asarray(m["A"], dtype=float), np.asarray(m["B"], dtype=float)
         C, D = np.asarray(m["C"], dtype=float)[0], np.asarray(m["D"], dtype=float)[0]
-        return A.reshape(len(A), -1), B.reshape(len(A), 3), C, D, np.float64(0.0), np.float64(s)
+        return A.reshape(len(A), -1), B.reshape(len(A), q), C, D, np.float64(0.0), np.float64(s)
     h = doc["history"]
     frames = int(h["frames"])
     w = np.asarray(h["weights"], dtype=float) / np.asarray(h["std"], dtype=float)
     c = float(h["bias"]) - float(w @ np.asarray(h["mean"], dtype=float))
-    r = 3 * (frames - 1)                   # ξ: the last frames − 1 inputs z, oldest first
-    A, B = np.zeros((r, r)), np.zeros((r, 3))
+    r = q * (frames - 1)                   # ξ: the last frames − 1 inputs z, oldest first
+    A, B = np.zeros((r, r)), np.zeros((r, q))
     if r:
-        A[:-3, 3:] = np.eye(r - 3)         # shift the stack by one frame …
-        B[-3:, :] = np.eye(3)              # … and append this period's z
+        A[:-q, q:] = np.eye(r - q)         # shift the stack by one frame …
+        B[-q:, :] = np.eye(q)              # … and append this period's z
     return A, B, w[:r], w[r:], np.float64(c), np.float64(s)
 
 
@@ -114,12 +117,12 @@ def compensator(doc: dict[str, Any], n: int) -> tuple[np.ndarray, Any, float]:
     from pendulum_lqg.policies.closed_loop import LinearEstimator
 
     A, B, C, D, c, s = _matrices(doc)
-    r = A.shape[0]
-    q, p = r + 1, 2
+    r, p = A.shape[0], D.shape[0] - 1
+    q = r + 1
     H, D_y = np.zeros((n, q)), np.zeros((n, p))
-    H[0, :r], H[0, r], D_y[0] = s * C, D[2], s * D[:2]
+    H[0, :r], H[0, r], D_y[0] = s * C, D[p], s * D[:p]
     F, G_y, G_u = np.zeros((q, q)), np.zeros((q, p)), np.zeros((q, 1))
-    F[:r, :r], F[:r, r], G_y[:r] = A, B[:, 2] / s, B[:, :2]
+    F[:r, :r], F[:r, r], G_y[:r] = A, B[:, p] / s, B[:, :p]
     G_u[r, 0] = 1.0
     K = np.zeros((1, n))
     K[0, 0] = -1.0

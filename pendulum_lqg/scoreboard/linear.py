@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from pendulum_lqg.boundary.schemas import LINEAR_FORMAT, LINEAR_INPUTS, LINEAR_VERSION
+from pendulum_lqg.boundary.schemas import LINEAR_FORMAT, LINEAR_VERSION, linear_inputs
 from pendulum_lqg.core.rules import saturate
 from pendulum_lqg.errors import ConfigError, NotApplicable
 from pendulum_lqg.scoreboard.obs_design import ObservationDesign, ObservationHistory
@@ -48,25 +48,27 @@ __all__ = ["HistoryPolicy", "LinearAgent", "LinearFactory", "StateSpacePolicy", 
 class _LinearPolicy:
     """The part both forms share: the held inputs ``z`` of every row and the saturated output.
 
-    A policy of the core's protocol (``reset(n)``, ``act(y) -> u`` [N], ``select(rows)``)."""
+    A policy of the core's protocol (``reset(n)``, ``act(y) -> u`` [N], ``select(rows)``);
+    ``outputs``: the p of ``y`` (2 on the cart-pole, ``z = [y, u_prev/s]`` has p + 1 numbers)."""
 
     independent_rows = True
 
-    def __init__(self, frames: int, action_scale: float, u_max: float) -> None:
+    def __init__(self, frames: int, action_scale: float, u_max: float, outputs: int = 2) -> None:
         self.design = ObservationDesign(frames, past_actions=True)
         self.scale, self.u_max = float(action_scale), float(u_max)
+        self.outputs = int(outputs)
         self.history: ObservationHistory | None = None
         self.u: np.ndarray | None = None
-        #: the inputs (n, frames·3) of the last period, oldest first
-        self.inputs = np.zeros((0, LINEAR_INPUTS * frames))
+        #: the inputs (n, frames·(p + 1)) of the last period, oldest first
+        self.inputs = np.zeros((0, (self.outputs + 1) * frames))
 
     def reset(self, n: int, x_hat0: np.ndarray | None = None) -> None:
-        self.history = ObservationHistory(self.design, n, 2, -np.inf, np.inf)
+        self.history = ObservationHistory(self.design, n, self.outputs, -np.inf, np.inf)
         self.u = None
 
     def act(self, y: np.ndarray) -> np.ndarray:
         assert self.history is not None, "reset(n) first"
-        y = np.asarray(y, dtype=float).reshape(-1, 2)
+        y = np.asarray(y, dtype=float).reshape(-1, self.outputs)
         if self.u is None:
             self.inputs = self.history.reset(y)
         else:
@@ -90,8 +92,8 @@ class HistoryPolicy(_LinearPolicy):
     search evaluates its perturbations as rows of one batch); ``bias`` likewise."""
 
     def __init__(self, weights: Any, mean: Any, std: Any, *, frames: int, action_scale: float,
-                 u_max: float, bias: Any = 0.0) -> None:
-        super().__init__(frames, action_scale, u_max)
+                 u_max: float, bias: Any = 0.0, outputs: int = 2) -> None:
+        super().__init__(frames, action_scale, u_max, outputs)
         self.weights = np.asarray(weights, dtype=float)
         self.bias = np.asarray(bias, dtype=float)
         self.mean, self.std = np.asarray(mean, dtype=float), np.asarray(std, dtype=float)
@@ -115,7 +117,7 @@ class StateSpacePolicy(_LinearPolicy):
 
     def __init__(self, A: Any, B: Any, C: Any, D: Any, *, action_scale: float,
                  u_max: float) -> None:
-        super().__init__(1, action_scale, u_max)
+        super().__init__(1, action_scale, u_max, np.asarray(D).shape[-1] - 1)
         self.A, self.B = np.asarray(A, dtype=float), np.asarray(B, dtype=float)
         self.C, self.D = np.asarray(C, dtype=float), np.asarray(D, dtype=float)
         self.xi = np.zeros((0, self.A.shape[0]))
@@ -164,13 +166,19 @@ def controller_file(form: str, params: dict[str, Any], *, action_scale: float,
     return out
 
 
-def linear_policy(doc: dict[str, Any], u_max: float) -> _LinearPolicy:
-    """The policy of a checked controller document ``doc`` for an actuator limit ``u_max`` [N]."""
-    scale = doc["action_scale"]
+def linear_policy(doc: dict[str, Any], u_max: float, *, outputs: int | None = None,
+                  name: str = "agent") -> _LinearPolicy:
+    """The policy of a checked controller document ``doc`` for an actuator limit ``u_max`` [N];
+    ``outputs``: the p of the plant it plays (its ``z`` must have p + 1 numbers, else
+    :class:`~pendulum_lqg.errors.NotApplicable` naming ``name``)."""
+    scale, q = doc["action_scale"], linear_inputs(doc)
+    if outputs is not None and q != outputs + 1:
+        raise NotApplicable(f"agent {name!r} takes {q - 1} outputs (z = [y, u_prev/s] of {q} "
+                            f"numbers); this plant has {outputs}")
     if doc["form"] == "history":
         h = doc["history"]
         return HistoryPolicy(h["weights"], h["mean"], h["std"], frames=h["frames"],
-                             bias=h["bias"], action_scale=scale, u_max=u_max)
+                             bias=h["bias"], action_scale=scale, u_max=u_max, outputs=q - 1)
     m = doc["state_space"]
     return StateSpacePolicy(m["A"], m["B"], m["C"], m["D"], action_scale=scale, u_max=u_max)
 
@@ -188,7 +196,8 @@ class LinearAgent:
                               "an env without normalize_action")
         if base.observation_mode != "measurement":
             raise NotApplicable(f"agent {name!r} takes y = [p, θ]; this env gives the state x")
-        self.policy = linear_policy(doc, limits(base.plant, base.scenario)[2])
+        self.policy = linear_policy(doc, limits(base.plant, base.scenario)[2],
+                                    outputs=int(base.observation_space.shape[0]), name=name)
 
     def reset(self) -> None:
         self.policy.reset(1)
@@ -240,7 +249,8 @@ def linear_rows(suite: Any, doc: dict[str, Any], *, name: str, nthread: int | No
                             "gives the true state")
     simulated, design = suite.plants()
     scenario = suite.config.scenario
-    policy = linear_policy(doc, limits(design, scenario)[2])
+    policy = linear_policy(doc, limits(design, scenario)[2],
+                           outputs=design.layout(scenario).p, name=name)
     res = run_episodes(simulated, scenario, policy, seed=suite.seed,
                        episodes=range(suite.episodes), nthread=nthread)
     return [{"episode": r["episode"], "seed": r["seed"], "success": r["success"],

@@ -16,13 +16,28 @@ current folder, or a shipped ``experiments/lti/…`` file), its reference design
     noise_scale = 1.0
     estimate0 = "zero"
 
+``lti_file`` is any plant file: a plant given as matrices or a MuJoCo plant (``model = "x.xml"``).
+
+**A plant's own suite** (``score --plant NAME|FILE``, ``train --plant``; :func:`plant_suite`) is
+the suite of :data:`PLANT_SUITE` on the plant NAME or FILE names: its name the plant's, its
+episodes the plant file's scenario (its x0, noise, cost and limits) for 10 s, seeded as the
+cart-pole suites (2026), the reference ``dlqr+kalman`` designed on it. The shipped
+``experiments/lti/two_mass_suite.toml`` writes exactly these keys, so ``score --plant
+experiments/lti/two_mass.toml`` and ``score --suite experiments/lti/two_mass_suite.toml`` give
+the same score file.
+
 Every entry is a built-in policy ``controller+observer`` designed on the file's plant
 (:func:`~pendulum_lqg.policies.lti.design_lti_policy`: the plant played, so the reference is the
-optimum the gap is taken to), played on the same seeded episodes through the one loop. The figures
-are the cart-pole suites' (:mod:`pendulum_lqg.scoreboard.score`): success rate, mean J, the
-optimality gap and the failure-aware score to the reference, the full-state bound (``dlqr+none``).
-Gymnasium agents and plug-ins play the cart-pole env and are not scored here (``score`` says so,
-one line).
+optimum the gap is taken to), or a linear controller file (``--agent linear:FILE``, of the
+plant's p outputs: :mod:`pendulum_lqg.scoreboard.linear`), played on the same seeded episodes
+through the one loop. The figures are the cart-pole suites' (:mod:`pendulum_lqg.scoreboard.score`):
+success rate, mean J, the optimality gap and the failure-aware score to the reference, the
+full-state bound (``dlqr+none``). Other Gymnasium agents and plug-ins are not scored here
+(``"applicable": false`` and the reason).
+
+An LTI suite answers what the learning methods ask of a suite (:attr:`LTISuite.env`,
+:attr:`LTISuite.config`, :meth:`LTISuite.plants`), so ``train --plant`` trains on the plant's env
+and its curve is judged on the plant's episodes.
 """
 
 from __future__ import annotations
@@ -30,6 +45,7 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +58,13 @@ from pendulum_lqg.util.limits import MAX_SCORE_EPISODES
 LTI_SUITE_KEYS = ("name", "version", "purpose", "lti_file", "reference", "episodes", "seed",
                   "scenario")
 SCENARIO_KEYS = ("duration", "noise_scale", "estimate0", "burn_in")
+#: A plant's own suite (:func:`plant_suite`): every key of a suite file but its name, purpose and
+#: plant, as the cart-pole suites seed and time their episodes.
+PLANT_SUITE: dict[str, Any] = {
+    "version": 1, "reference": "dlqr+kalman", "episodes": 100, "seed": 2026,
+    "scenario": {"duration": 10.0, "noise_scale": 1.0, "estimate0": "zero"}}
+#: The scenario keys the environments take beside ``plant`` (:attr:`LTISuite.env`).
+_ENV_KEYS = ("duration", "noise_scale")
 # What the designs of an LTI suite are designed on, DESIGNED_ON_LTI (the file's plant, the plant
 # played), is kept where the score files' schema reads it: pendulum_lqg.boundary.schemas.
 
@@ -60,6 +83,8 @@ class LTISuite:
     scenario: dict[str, Any] = field(default_factory=dict)
     origin: str = ""
     designed_on: str = DESIGNED_ON_LTI
+    #: the plant as ``--plant`` named it (a shipped NAME stays a name in the env's keywords)
+    plant_ref: str = ""
 
     def plant(self) -> Any:
         """The suite's plant (:func:`~pendulum_lqg.model.catalog.load_plant_at`: matrices or a
@@ -67,6 +92,39 @@ class LTISuite:
         from pendulum_lqg.model.catalog import load_plant_at
 
         return load_plant_at(self.lti_file)
+
+    # ---- what a cart-pole suite answers too (the learning methods, linear controllers) ----
+    observes_state = False            # a plant's suite observes its outputs y
+
+    def plants(self) -> tuple[Any, Any]:
+        """``(simulated, design)``: the plant played, loaded twice (the designs never share the
+        simulator's model)."""
+        return self.plant(), self.plant()
+
+    @cached_property
+    def config(self) -> Any:
+        """The :class:`~pendulum_lqg.envs.config.EnvConfig` of the suite's episodes: the plant's
+        scenario (:func:`~pendulum_lqg.policies.lti.lti_scenario` of the ``[scenario]`` keys),
+        observing y."""
+        from pendulum_lqg.envs.config import DEFAULT_REWARD_SCALE, EnvConfig
+        from pendulum_lqg.policies.lti import lti_scenario
+
+        plant = self.plant()
+        return EnvConfig(scenario=lti_scenario(plant, **self.scenario),
+                         observation_mode="measurement", reward_scale=DEFAULT_REWARD_SCALE,
+                         model_path=None, plant_file=plant)
+
+    @property
+    def env(self) -> dict[str, Any]:
+        """The environments' keywords of the suite's plant (``plant``: its file) and scenario:
+        what ``train --plant`` trains on."""
+        return {"plant": self.plant_ref or str(self.lti_file),
+                **{k: v for k, v in self.scenario.items() if k in _ENV_KEYS}}
+
+    def errors_named(self, what: str, exc: Any) -> Any:
+        """``exc`` found while playing ``what`` of the suite, naming the suite's file."""
+        where = self.origin or f"suite {self.name!r}"
+        return exc if str(exc).startswith(where) else type(exc)(f"{where}: {what}: {exc}")
 
     def fingerprint(self) -> str:
         """sha256 of what decides the episodes: the definition and the plant file's bytes."""
@@ -88,6 +146,21 @@ class LTISuite:
                            episodes=range(self.episodes))
         return [{k: r[k] for k in ("episode", "seed", "success", "failure_reason", "cost")}
                 for r in res.rows]
+
+
+def plant_suite(ref: str | Path, *, what: str = "--plant") -> LTISuite:
+    """The plant's own suite (module docstring, :data:`PLANT_SUITE`) of the plant ``ref``
+    names (a shipped NAME or a plant file; the cart-pole's suites are the shipped ones)."""
+    from pendulum_lqg.model.catalog import is_cartpole, load_plant_at, plant_path
+
+    if is_cartpole(ref):
+        raise ConfigError(f"{what}: the cart-pole's suites are the shipped ones (score --suite "
+                          "NAME), not one plant suite")
+    path = plant_path(ref, what=what).resolve()
+    plant = load_plant_at(path)                # the file checked: one line naming it and the key
+    name = plant.name.replace("_", "-")
+    return LTISuite(name=name, purpose=f"the plant {name}'s own suite ({path.name})",
+                    lti_file=path, origin=str(ref), plant_ref=str(ref), **PLANT_SUITE)
 
 
 def names_an_lti_plant(name_or_path: str) -> bool:
@@ -138,10 +211,12 @@ def load_lti_suite(path: str | Path) -> LTISuite:
 
 
 def lti_suite_entry(suite: LTISuite, policy: str,
-                    cache: dict[str, list[dict[str, Any]]] | None = None) -> dict[str, Any]:
+                    cache: dict[str, list[dict[str, Any]]] | None = None, *,
+                    entry_rows: Any = None) -> dict[str, Any]:
     """The score file's entry of the built-in ``policy`` on ``suite``: the cart-pole suites'
     figures (:func:`~pendulum_lqg.scoreboard.score.suite_figures`) against the suite's reference
-    and the full-state bound, on the same seeds. ``cache`` keeps rows by policy."""
+    and the full-state bound, on the same seeds. ``cache`` keeps rows by policy;
+    ``entry_rows()``, where given, plays the entry instead (a linear controller file)."""
     from pendulum_lqg.scoreboard.score import FULL_STATE_POLICY, suite_figures
 
     memo = {} if cache is None else cache
@@ -155,35 +230,67 @@ def lti_suite_entry(suite: LTISuite, policy: str,
         reference, bound = rows(suite.reference), rows(FULL_STATE_POLICY)
     except ConfigError as exc:
         raise ConfigError(f"{suite.origin}: reference: {exc}") from None
-    out = suite_figures(rows(policy), reference, bound, reference_policy=suite.reference)
+    played = rows(policy) if entry_rows is None else entry_rows()
+    out = suite_figures(played, reference, bound, reference_policy=suite.reference)
     return {"applicable": True, **out, "version": suite.version,
             "fingerprint": suite.fingerprint(), "designed_on": suite.designed_on,
-            "lti_file": str(suite.lti_file), "rows": [dict(r) for r in rows(policy)]}
+            "lti_file": str(suite.lti_file), "rows": [dict(r) for r in played]}
 
 
 def lti_suite_entries(suites: list[LTISuite], *, policy: str | None, agent: str | None,
                       episodes: int | None = None, noise_scale: float | None = None,
-                      ) -> dict[str, dict[str, Any]]:
+                      nthread: int | None = None) -> dict[str, dict[str, Any]]:
     """The score file's ``suites`` entries of one entry on LTI ``suites`` (``score --suite
-    FILE``): a built-in ``policy`` is scored (:func:`lti_suite_entry`); a Gymnasium agent or a
-    plug-in, which play the cart-pole, gets ``"applicable": false`` and the reason. ``episodes``
-    and ``noise_scale`` as ``score``'s options (every suite's own by default)."""
+    FILE``, ``score --plant``): a built-in ``policy`` is scored (:func:`lti_suite_entry`), and a
+    linear controller file (``agent`` ``linear:FILE``) through the same batch; another Gymnasium
+    agent or a plug-in gets ``"applicable": false`` and the reason, as does a controller of
+    another number of outputs. ``episodes`` and ``noise_scale`` as ``score``'s options (every
+    suite's own by default)."""
     import dataclasses
 
+    from pendulum_lqg.errors import NotApplicable
     from pendulum_lqg.policies.loading import is_plugin_ref
 
+    factory = None
+    if agent is not None and agent.startswith("linear:"):
+        from pendulum_lqg.scoreboard.linear import linear_agent
+
+        factory = linear_agent(agent.removeprefix("linear:"))
     out: dict[str, dict[str, Any]] = {}
     for s in suites:
         if episodes is not None:
             s = dataclasses.replace(s, episodes=episodes)
         if noise_scale is not None:
             s = dataclasses.replace(s, scenario={**s.scenario, "noise_scale": noise_scale})
-        if agent is not None or policy is None or is_plugin_ref(policy):
+        reason = None
+        if factory is not None:
+            try:
+                out[s.name] = lti_suite_entry(s, s.reference,
+                                              entry_rows=_linear_rows(s, factory, nthread))
+                continue
+            except NotApplicable as exc:
+                reason = str(exc)
+        elif agent is not None or policy is None or is_plugin_ref(policy):
             what = "a Gymnasium agent" if agent is not None else "a plug-in"
+            reason = (f"a plant's suite scores the built-in policies and linear controller "
+                      f"files (linear:FILE); {what} is played on the cart-pole's suites")
+        if reason is not None:
             out[s.name] = {"applicable": False, "episodes": s.episodes, "version": s.version,
-                           "reason": f"an LTI suite scores the built-in policies; {what} plays "
-                                     "the cart-pole", "fingerprint": s.fingerprint(),
+                           "reason": reason, "fingerprint": s.fingerprint(),
                            "designed_on": s.designed_on}
         else:
+            assert policy is not None
             out[s.name] = lti_suite_entry(s, policy)
     return out
+
+
+def _linear_rows(suite: LTISuite, factory: Any, nthread: int | None) -> Any:
+    """The rows of a linear controller file on ``suite``
+    (:func:`~pendulum_lqg.scoreboard.linear.linear_rows`), played when asked; a controller of
+    another p is refused before the suite's own rows are run."""
+    from pendulum_lqg.scoreboard.linear import linear_policy, linear_rows
+
+    plant = suite.plant()
+    linear_policy(factory.doc, 1.0, outputs=plant.layout(suite.config.scenario).p,
+                  name=factory.name)
+    return lambda: linear_rows(suite, factory.doc, name=factory.name, nthread=nthread)

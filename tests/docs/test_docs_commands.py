@@ -162,6 +162,9 @@ REDUCED: dict[str, tuple[str, str]] = {
     "pendulum-lqg train sysid-openloop --seed 0 --out runs/linear":
         ("pendulum-lqg train sysid-openloop --seed 0 --steps 5000 --out runs/linear",
          "1 000 000 logged steps: 5 000"),
+    "uv run pendulum-lqg train ars-history --plant double-cartpole --out runs/double":
+        ("pendulum-lqg train ars-history --plant double-cartpole --steps 2000 --eval-every 1000 "
+         "--out runs/double", "a training run of 200 000 env steps: 2 000"),
     "pendulum-lqg train ls-clone --seed 0 --out runs/clone":
         ("pendulum-lqg train ls-clone --seed 0 --steps 2000 --out runs/clone",
          "20 000 closed-loop samples of the fit: 2 000 (the identification it clones runs whole)"),

@@ -30,9 +30,11 @@ def _one_line(status, err, needle):
 
 def test_train_list_names_every_method(capsys):
     assert main(["train", "--list"]) == 0
-    lines = capsys.readouterr().out.splitlines()
+    *lines, plants = capsys.readouterr().out.splitlines()
     names = [line.split()[0] for line in lines]
     assert names == list(METHODS)
+    # the last line: the methods train --plant takes (the ARS ones read the plant's sizes)
+    assert plants == "--plant NAME|FILE (any plant of one input): ars-history, ars-history-clone"
     for name in ("ppo-history", "recurrentppo-actions", "sac-history", "ppo-kalman",
                  "ppo-full-state", "ars-history", "ars-history-clone", "ls-clone", "sysid-lqg",
                  "sysid-openloop"):
