@@ -354,11 +354,14 @@ class PluginPolicy:
     independent_rows : ``inner``'s promise (default False); True is checked by one deep copy
     estimator : present only if ``inner`` has one (recordings log its ``x_prior``,
         ``innovation`` and ``P``)
+    sizes : ``(n, m, p)``, the plant's states, inputs and outputs (default the cart-pole's
+        ``(4, 1, 2)``): ``act`` returns m inputs per row, ``x_hat`` has n columns
     """
 
-    def __init__(self, name: str, inner: object) -> None:
+    def __init__(self, name: str, inner: object, sizes: tuple[int, int, int] = (4, 1, 2)) -> None:
         self.name = name
         self.inner = inner
+        self.sizes = sizes
         for method in ("reset", "act"):
             if not callable(self._member(method, None)):
                 raise PluginError(f"policy {name!r}: the factory returned {type(inner).__name__}, "
@@ -429,12 +432,19 @@ class PluginPolicy:
         self._rows = n
 
     def act(self, y: np.ndarray) -> np.ndarray:
-        """Forces (n,) for the rows of ``y``; shape and type checked, non-finite values kept (the
-        core ends those episodes as ``diverged``)."""
+        """Inputs (n,) — (n, m) for a plant of m > 1 inputs — for the rows of ``y``; shape and
+        type checked, non-finite values kept (the core ends those episodes as ``diverged``)."""
         self._rows = y.shape[0]
         return self._check(self._call("act", self.inner.act, y), y.shape[0])  # type: ignore[attr-defined]
 
     def _check(self, u: object, n: int) -> np.ndarray:
+        m = self.sizes[1]
+        if m > 1:
+            arr = self._array("act", "inputs", u, f"an array of {n} × {m} inputs, shape ({n}, {m})")
+            if arr.shape != (n, m):
+                raise PluginError(f"policy {self.name!r}: act returned shape {arr.shape}; "
+                                  f"expected ({n}, {m}): {m} inputs per running episode")
+            return arr
         arr = self._array("act", "forces", u, f"an array of {n} forces in newtons, shape ({n},)")
         if arr.shape not in ((n,), (n, 1)):
             raise PluginError(f"policy {self.name!r}: act returned shape {arr.shape}; expected "
@@ -460,11 +470,12 @@ class PluginPolicy:
 
     @property
     def x_hat(self) -> np.ndarray | None:
-        """The plugin's current estimate (n, 4), or None; anything else is a :class:`PluginError`."""
+        """The plugin's current estimate (rows, n), or None; anything else is a
+        :class:`PluginError`."""
         est = self._member("x_hat", None)
         if est is None:
             return None
-        return self.checked_rows("x_hat", est, (4,))
+        return self.checked_rows("x_hat", est, (self.sizes[0],))
 
     def checked_rows(self, member: str, value: object, tail: tuple[int, ...]) -> np.ndarray:
         """``value`` as a real (n, *tail) array, n the rows of the last ``act``."""
@@ -487,8 +498,8 @@ class PluginPolicy:
 
 
 class _EstimatorView:
-    """A plugin's ``estimator`` as recordings read it: ``x_prior`` (n, 4), ``innovation`` (n, 2)
-    and ``P`` (4, 4) or (n, 4, 4), each checked when read (absent: not recorded)."""
+    """A plugin's ``estimator`` as recordings read it: ``x_prior`` (rows, n), ``innovation``
+    (rows, p) and ``P`` (n, n) or (rows, n, n), each checked when read (absent: not recorded)."""
 
     def __init__(self, policy: PluginPolicy, estimator: object) -> None:
         self._policy, self._estimator = policy, estimator
@@ -505,15 +516,16 @@ class _EstimatorView:
 
     @property
     def x_prior(self) -> np.ndarray | None:
-        return self._read("x_prior", ((4,),))
+        return self._read("x_prior", ((self._policy.sizes[0],),))
 
     @property
     def innovation(self) -> np.ndarray | None:
-        return self._read("innovation", ((2,),))
+        return self._read("innovation", ((self._policy.sizes[2],),))
 
     @property
     def P(self) -> np.ndarray | None:
-        return self._read("P", ((4, 4), (4, 4)))
+        n = self._policy.sizes[0]
+        return self._read("P", ((n, n), (n, n)))
 
 
 def _short(value: object) -> str:
@@ -544,7 +556,9 @@ def build_policy(name: str | None, *, plant: SimulatedPlant, scenario: Scenario,
     if name is not None and is_plugin_ref(name):
         factory = load_factory(name, base_dir=base_dir)
         ctx = context if context is not None else PolicyContext.build(plant, scenario)
-        return PluginPolicy(name, guarded(name, "the factory", factory, ctx))
+        lay = ctx.layout if ctx.layout is not None else plant.layout(scenario)
+        return PluginPolicy(name, guarded(name, "the factory", factory, ctx),
+                            sizes=(lay.n, lay.m, lay.p))
     if name is not None:
         controller, observer = split_builtin(name)
         spec = dataclasses.replace(spec, controller=controller, observer=observer)
